@@ -1,0 +1,84 @@
+"""Input checks shared by the transfer models.
+
+Every check raises ``ValueError`` with a message that names the offending argument, so a
+caller (for example the mapping service) can hand the message straight back to its user.
+"""
+import numbers
+
+import numpy as np
+from sklearn.exceptions import NotFittedError  # a ValueError subclass
+
+
+def as_matrix(X, name):
+    """Return ``X`` as a C-contiguous float64 (rows, cols) array, or raise ValueError."""
+    try:
+        X = np.asarray(X, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a numeric 2-D array: {exc}") from None
+    if X.ndim != 2:
+        raise ValueError(f"{name} must be a 2-D array (rows = samples), got {X.ndim}-D "
+                         f"with shape {X.shape}")
+    if X.shape[1] == 0:
+        raise ValueError(f"{name} has no columns")
+    finite = np.isfinite(X)
+    if not finite.all():
+        row = int(np.argwhere(~finite)[0, 0])
+        raise ValueError(f"{name} contains NaN or infinite values (first in row {row})")
+    return np.ascontiguousarray(X)
+
+
+def as_correspondences(source, target, min_rows):
+    """Check a correspondence set: ``source[i]`` and ``target[i]`` are in correspondence."""
+    source = as_matrix(source, "source")
+    target = as_matrix(target, "target")
+    if source.shape[0] != target.shape[0]:
+        raise ValueError("source and target must have the same number of rows (one row per "
+                         f"correspondence): got {source.shape[0]} and {target.shape[0]}")
+    if source.shape[0] < min_rows[0]:
+        raise ValueError(f"too few correspondences: got {source.shape[0]}, need at least "
+                         f"{min_rows[0]} ({min_rows[1]})")
+    return source, target
+
+
+def resolve_latent_dim(latent_dim, n_source_dims, n_target_dims):
+    """The latent dimensionality d of PA (thesis §3.2); ``None`` means min(D_s, D_t)."""
+    if latent_dim is None:
+        return min(n_source_dims, n_target_dims)
+    check_int(latent_dim, "latent_dim", minimum=1)
+    for side, dims in (("source", n_source_dims), ("target", n_target_dims)):
+        if latent_dim > dims:
+            raise ValueError(f"latent_dim={latent_dim} is larger than the {side} "
+                             f"dimensionality {dims}")
+    return int(latent_dim)
+
+
+def check_int(value, name, minimum):
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+
+
+def check_float(value, name, minimum):
+    if (isinstance(value, bool) or not isinstance(value, numbers.Real)
+            or not np.isfinite(value) or value < minimum):
+        raise ValueError(f"{name} must be a finite number >= {minimum}, got {value!r}")
+
+
+def check_seed(value):
+    if value is not None:
+        check_int(value, "random_state", minimum=0)
+
+
+def check_fitted(model, attribute="coef_"):
+    if not hasattr(model, attribute):
+        raise NotFittedError(f"this {type(model).__name__} is not fitted yet: call "
+                             "fit(source, target) first")
+
+
+def as_transfer_input(model, source):
+    """Check the source points handed to ``transfer`` against the fitted width."""
+    check_fitted(model)
+    source = as_matrix(source, "source")
+    if source.shape[1] != model.n_features_in_:
+        raise ValueError(f"source has {source.shape[1]} columns but the model was fitted "
+                         f"on {model.n_features_in_} source dimensions")
+    return source

@@ -1,0 +1,95 @@
+"""The model file format: a versioned ``.npz`` archive, read without pickle.
+
+A model file is a NumPy ``.npz`` (zip of ``.npy`` arrays) with these entries:
+
+=====================  =====================================================================
+``format``             the string ``"lpa_transfer-model"``
+``format_version``     integer, currently ``1``; readers refuse versions they do not know
+``model_class``        ``"ProcrustesAnalysis"`` or ``"LocalProcrustesAnalysis"``
+``hyperparameters``    JSON text of the constructor arguments (``get_params()``)
+``<attribute>_``       one entry per learned attribute (float64/int arrays; scalars as 0-d
+                       arrays), named exactly as the attribute, e.g. ``coef_``, ``means_``
+=====================  =====================================================================
+
+Arrays are stored bit for bit, so a loaded model transfers bit-identically. Files are written
+to a temporary name and renamed, so a crash never leaves a half-written model behind.
+"""
+import json
+import os
+import tempfile
+
+import numpy as np
+
+FORMAT = "lpa_transfer-model"
+FORMAT_VERSION = 1
+_REGISTRY = {}
+
+
+class SavableModel:
+    """Mixin: ``save(path)`` and ``load(path)`` for estimators that list ``_learned``."""
+
+    _learned = ()
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        _REGISTRY[cls.__name__] = cls
+
+    def save(self, path):
+        """Write the fitted model to ``path`` (see the module docstring for the format)."""
+        from ._validation import check_fitted
+        check_fitted(self)
+        entries = {
+            "format": np.array(FORMAT),
+            "format_version": np.array(FORMAT_VERSION),
+            "model_class": np.array(type(self).__name__),
+            "hyperparameters": np.array(json.dumps(self.get_params())),
+        }
+        entries.update({name: np.asarray(getattr(self, name)) for name in self._learned})
+        path = os.fspath(path)
+        directory = os.path.dirname(os.path.abspath(path))
+        fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=".npz")
+        try:
+            with os.fdopen(fd, "wb") as stream:
+                np.savez(stream, **entries)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path):
+        """Read a model written by :meth:`save`; raises ValueError if it is not one of ours."""
+        model = load_model(path)
+        if not isinstance(model, cls):
+            raise ValueError(f"{path} holds a {type(model).__name__}, not a {cls.__name__}")
+        return model
+
+
+def load_model(path):
+    """Load any lpa_transfer model file, dispatching on its ``model_class`` entry."""
+    try:
+        archive = np.load(os.fspath(path), allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"cannot read model file {path}: {exc}") from None
+    with archive:
+        header = {key: archive[key].item() for key in
+                  ("format", "format_version", "model_class", "hyperparameters")
+                  if key in archive.files}
+        if header.get("format") != FORMAT:
+            raise ValueError(f"{path} is not an lpa_transfer model file")
+        if header.get("format_version") != FORMAT_VERSION:
+            raise ValueError(f"{path} has model format version {header.get('format_version')}, "
+                             f"this library reads version {FORMAT_VERSION}")
+        cls = _REGISTRY.get(header.get("model_class"))
+        if cls is None:
+            raise ValueError(f"{path} holds an unknown model class {header.get('model_class')!r}")
+        model = cls(**json.loads(header["hyperparameters"]))
+        missing = [name for name in cls._learned if name not in archive.files]
+        if missing:
+            raise ValueError(f"{path} lacks the learned attributes {missing}")
+        for name in cls._learned:
+            value = archive[name]
+            setattr(model, name, value.item() if value.ndim == 0 else value)
+    return model
