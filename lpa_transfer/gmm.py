@@ -13,7 +13,7 @@ from .procrustes import grouped_moments
 _LOG_2PI = np.log(2.0 * np.pi)
 _LOG_FLOOR = -700.0
 #: Work-array size per block of rows: small enough to stay in cache.
-_BLOCK_ELEMENTS = 1 << 15
+_BLOCK_ELEMENTS = 1 << 17
 
 
 def precisions_cholesky(covariances):
@@ -39,39 +39,43 @@ def row_blocks(n_rows, row_elements):
     return [slice(start, start + step) for start in range(0, n_rows, step)]
 
 
+def quadratic_features(X):
+    """[x_i x_j for i <= j, x]: the (N, d(d+1)/2 + d) features of a quadratic form."""
+    upper = np.triu_indices(X.shape[1])
+    return np.hstack((X[:, upper[0]] * X[:, upper[1]], X))
+
+
 class Responsibilities:
     """Evaluates γ_k(x) (eq. 3.9/3.11) and log p(x) (eq. 3.8) for blocks of rows.
 
-    The Mahalanobis term is expanded, (x−μ)ᵀΛ(x−μ) = vec(x xᵀ)·vec(Λ) − 2 xᵀΛμ + μᵀΛμ, so
-    that log π_k N(x | μ_k, Σ_k) for all K components is one matrix product of the features
-    [vec(x xᵀ), x] (d² + d columns) with a (d² + d, K) coefficient matrix. Rows are
+    The Mahalanobis term is expanded, (x−μ)ᵀΛ(x−μ) = Σ_{i≤j} c_ij x_i x_j − 2 xᵀΛμ + μᵀΛμ,
+    so that log π_k N(x | μ_k, Σ_k) for all K components is one matrix product of
+    :func:`quadratic_features` with a (d(d+1)/2 + d, K) coefficient matrix. Rows are
     expressed relative to ``centre`` (default: the mixture's mean) to limit cancellation.
     """
 
     def __init__(self, weights, means, precisions_chol, centre=None):
-        n_components, dim = means.shape
+        dim = means.shape[1]
         self.centre = weights @ means if centre is None else centre
         means = means - self.centre
         precision = precisions_chol @ np.swapaxes(precisions_chol, 1, 2)      # Λ_k = P Pᵀ
         linear = np.einsum("kij,kj->ki", precision, means)
-        self.coefficients = np.vstack((-0.5 * precision.reshape(n_components, -1).T,
-                                       linear.T))
+        upper = np.triu_indices(dim)
+        quadratic = np.where(upper[0] == upper[1], -0.5, -1.0) * precision[:, upper[0], upper[1]]
+        self.coefficients = np.vstack((quadratic.T, linear.T))
         self.constant = (np.log(weights) - 0.5 * dim * _LOG_2PI
                          + np.log(np.diagonal(precisions_chol, axis1=1, axis2=2)).sum(axis=1)
                          - 0.5 * np.einsum("ki,ki->k", means, linear))
 
-    def features(self, X):
-        """[vec(x xᵀ), x] of the centred rows: (N, d² + d)."""
-        X = X - self.centre
-        return np.hstack(((X[:, :, None] * X[:, None, :]).reshape(len(X), -1), X))
-
     def blocks(self, X, features=None):
         """Yield ``(rows, γ (R, K), log p(x) (R,))`` for consecutive blocks of rows of X.
 
-        ``features`` may hold precomputed :meth:`features` of X (EM reuses them).
+        ``features`` may hold precomputed :func:`quadratic_features` of the centred X.
         """
-        for rows in row_blocks(len(X), len(self.constant)):
-            block = self.features(X[rows]) if features is None else features[rows]
+        width = max(len(self.constant), len(self.coefficients))
+        for rows in row_blocks(len(X), width):
+            block = (quadratic_features(X[rows] - self.centre) if features is None
+                     else features[rows])
             weighted = block @ self.coefficients
             weighted += self.constant
             peak = weighted.max(axis=1, keepdims=True)
@@ -110,11 +114,11 @@ def _em_iteration(X, features, weights, means, precisions_chol, reg_covar):
     """One E-step fused with the M-step's sums, block by block (full covariances).
 
     ``X`` is centred (the EM works relative to the data mean) and ``features`` holds its
-    [vec(x xᵀ), x] rows. Returns the mean log-likelihood under the old parameters and the new
-    weights, means and covariances.
+    :func:`quadratic_features`. Returns the mean log-likelihood under the old parameters
+    and the new weights, means and covariances.
     """
     dim, n_components = X.shape[1], len(weights)
-    sums = np.zeros((n_components, features.shape[1]))          # Σ γ x xᵀ and Σ γ x
+    sums = np.zeros((n_components, features.shape[1]))      # Σ γ x_i x_j (i ≤ j) and Σ γ x
     n_k = np.zeros(n_components)
     log_likelihood = 0.0
     responsibilities = Responsibilities(weights, means, precisions_chol, np.zeros(dim))
@@ -123,9 +127,12 @@ def _em_iteration(X, features, weights, means, precisions_chol, reg_covar):
         n_k += resp.sum(axis=0)
         sums += resp.T @ features[rows]
     n_k += 10 * np.finfo(float).eps
-    means = sums[:, dim * dim:] / n_k[:, None]
-    covariances = sums[:, :dim * dim].reshape(-1, dim, dim) / n_k[:, None, None]
-    covariances -= means[:, :, None] * means[:, None, :]
+    upper = np.triu_indices(dim)
+    second = np.empty((n_components, dim, dim))
+    second[:, upper[0], upper[1]] = sums[:, :len(upper[0])]
+    second[:, upper[1], upper[0]] = sums[:, :len(upper[0])]
+    means = sums[:, len(upper[0]):] / n_k[:, None]
+    covariances = second / n_k[:, None, None] - means[:, :, None] * means[:, None, :]
     covariances += reg_covar * np.eye(dim)
     return log_likelihood / len(X), n_k / len(X), means, covariances
 
@@ -140,7 +147,7 @@ def fit_em(X, weights, means, covariances, reg_covar=1e-6, max_iter=100, tol=1e-
     offset = X.mean(axis=0)                  # centring keeps the moment form well conditioned
     X = X - offset
     means = means - offset
-    features = np.hstack(((X[:, :, None] * X[:, None, :]).reshape(len(X), -1), X))
+    features = quadratic_features(X)
     precisions_chol = precisions_cholesky(covariances)
     log_likelihood, converged, n_iter = -np.inf, False, 0
     for n_iter in range(1, max_iter + 1):

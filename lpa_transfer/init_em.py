@@ -13,6 +13,7 @@ a few array operations however many clusters there are. Two choices the thesis l
 * when k_max would be exceeded, the clusters with the largest c_k are split first.
 """
 import numpy as np
+from scipy.sparse import csr_matrix
 
 from .procrustes import grouped_moments, procrustes_maps
 
@@ -54,8 +55,8 @@ def two_means(X, groups, n_groups, rng):
         second_half = assignment
         cells = keys + assignment
         sizes = np.bincount(cells, minlength=2 * n_groups)
-        sums = np.stack([np.bincount(cells, weights=X[:, j], minlength=2 * n_groups)
-                         for j in range(X.shape[1])], axis=1)
+        sums = csr_matrix((np.ones(len(X)), (cells, np.arange(len(X)))),
+                          shape=(2 * n_groups, len(X))) @ X
         occupied = sizes > 0
         flat = centres.reshape(2 * n_groups, -1)
         flat[occupied] = sums[occupied] / sizes[occupied, None]

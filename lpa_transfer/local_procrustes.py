@@ -15,6 +15,9 @@ from .init_em import init_em
 from .model_io import SavableModel
 from .procrustes import grouped_moments, procrustes_maps
 
+#: Responsibilities below this contribute less than double precision to eq. 3.12.
+_NEGLIGIBLE_RESPONSIBILITY = 1e-17
+
 class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
     """Local Procrustes Analysis (Alg. 3-5).
 
@@ -151,15 +154,24 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         return out
 
     def transfer(self, source):
-        """Map source points (M, D_s) to the target domain (M, D_t) (Alg. 4, eq. 3.12)."""
-        source = check.as_transfer_input(self, source)
-        n_clusters, n_out, n_in = self.coef_.shape
-        stacked = np.moveaxis(self.coef_, 2, 0).reshape(n_in, n_clusters * n_out)
-        out = np.empty((len(source), n_out))
-        for rows, resp, _ in self._responsibility_blocks(source):
-            local = (source[rows] @ stacked).reshape(-1, n_clusters, n_out)   # f_k(z_s), all k
-            local += self.intercept_
-            out[rows] = np.einsum("nk,nkd->nd", resp, local)
+        """Map source points (M, D_s) to the target domain (M, D_t) (Alg. 4, eq. 3.12).
+
+        ẑ_t = Σ_k γ_k f_k(z_s). Terms with γ_k < 1e-17 (below double precision next to the
+        dominant γ ≥ 1/K) are skipped, so each local map f_k is evaluated only on the points
+        it is responsible for.
+        """
+        gamma = self.responsibilities(source)
+        source = np.asarray(source, dtype=np.float64)
+        points, components = np.nonzero(gamma >= _NEGLIGIBLE_RESPONSIBILITY)
+        order = np.argsort(components, kind="stable")
+        points, components = points[order], components[order]
+        bounds = np.concatenate(([0], np.cumsum(np.bincount(components,
+                                                            minlength=self.n_clusters_))))
+        out = np.zeros((len(source), self.n_features_out_))
+        for k in np.flatnonzero(np.diff(bounds)):
+            rows = points[bounds[k]:bounds[k + 1]]
+            local = source[rows] @ self.coef_[k].T + self.intercept_[k]     # f_k(z_s)
+            out[rows] += gamma[rows, k, None] * local
         return out
 
 

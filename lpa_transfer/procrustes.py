@@ -31,16 +31,19 @@ def grouped_moments(Z, labels, n_groups):
     """Counts, means and maximum-likelihood covariances of the rows of ``Z`` per label.
 
     ``labels`` holds integers in ``[0, n_groups)`` and every group must be non-empty.
-    Returns ``counts (K,)``, ``means (K, D)``, ``covariances (K, D, D)``.
+    Returns ``counts (K,)``, ``means (K, D)``, ``covariances (K, D, D)``. The centred rows
+    are laid out as a zero-padded (K, max N_k, D) stack so that all K covariances come from
+    one batched matrix product.
     """
     order = np.argsort(labels, kind="stable")
     sorted_Z, sorted_labels = Z[order], labels[order]
     counts = np.bincount(labels, minlength=n_groups)
     starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
     means = np.add.reduceat(sorted_Z, starts, axis=0) / counts[:, None]
-    centred = sorted_Z - means[sorted_labels]
-    outer = centred[:, :, None] * centred[:, None, :]
-    covariances = np.add.reduceat(outer, starts, axis=0) / counts[:, None, None]
+    padded = np.zeros((n_groups, counts.max(), Z.shape[1]))
+    padded[sorted_labels, np.arange(len(Z)) - starts[sorted_labels]] = \
+        sorted_Z - means[sorted_labels]
+    covariances = np.swapaxes(padded, 1, 2) @ padded / counts[:, None, None]
     return counts, means, covariances
 
 
