@@ -1,0 +1,91 @@
+"""Robot parameter files (TOML) for the source and target robots.
+
+A file describes a planar serial chain as in the thesis' Table 3.1 (§3.6)::
+
+    name = "two_link_source"
+    source = "Makondo, PhD thesis, §3.6, Table 3.1 (source robot)"
+    [[links]]
+    length = 0.3          # m
+    [[joints]]
+    lower = 0.0           # rad
+    upper = 1.5707963
+
+with one ``[[joints]]`` table per ``[[links]]`` table (joint i moves link i). Keys not
+listed here are ignored, so files can grow (masses, inertias, ...) without breaking this
+loader.
+"""
+import dataclasses
+import numbers
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RobotParams:
+    """A robot read from a parameter file; the arrays are read-only."""
+
+    name: str
+    link_lengths: np.ndarray   # (n,) m
+    joint_limits: np.ndarray   # (n, 2) rad, columns (lower, upper)
+    source: str                # where the numbers come from (e.g. a thesis table)
+
+    def __post_init__(self):
+        for field in ("link_lengths", "joint_limits"):
+            array = np.array(getattr(self, field), dtype=np.float64)
+            array.setflags(write=False)
+            object.__setattr__(self, field, array)
+
+    @property
+    def n_joints(self):
+        return len(self.link_lengths)
+
+
+def _number(table, key, where):
+    value = table.get(key)
+    if value is None:
+        raise ValueError(f"{where}: missing key '{key}'")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+        raise ValueError(f"{where}: key '{key}' must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _tables(data, key, path):
+    tables = data.get(key)
+    if not isinstance(tables, list) or not tables or not all(isinstance(t, dict)
+                                                            for t in tables):
+        raise ValueError(f"{path}: missing or empty '[[{key}]]' tables")
+    return tables
+
+
+def load_robot_params(path):
+    """Read and validate a robot parameter file; errors name the file and the key."""
+    path = Path(path)
+    try:
+        with path.open("rb") as handle:
+            data = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: {exc}") from None
+    for key in ("name", "source"):
+        if not isinstance(data.get(key), str) or not data[key].strip():
+            raise ValueError(f"{path}: missing key '{key}' (a non-empty string)")
+    links, joints = _tables(data, "links", path), _tables(data, "joints", path)
+    if len(links) != len(joints):
+        raise ValueError(f"{path}: {len(links)} [[links]] but {len(joints)} [[joints]]; a "
+                         "serial chain needs one joint per link")
+    lengths = []
+    for i, link in enumerate(links):
+        length = _number(link, "length", f"{path}: links[{i}]")
+        if length <= 0:
+            raise ValueError(f"{path}: links[{i}]: key 'length' must be positive, got {length}")
+        lengths.append(length)
+    limits = []
+    for i, joint in enumerate(joints):
+        where = f"{path}: joints[{i}]"
+        lower, upper = _number(joint, "lower", where), _number(joint, "upper", where)
+        if lower > upper:
+            raise ValueError(f"{where}: key 'lower' ({lower}) is greater than 'upper' ({upper})")
+        limits.append((lower, upper))
+    return RobotParams(name=data["name"], link_lengths=lengths, joint_limits=limits,
+                       source=data["source"])
