@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# The one set-up path: builds the project-local venv .venv with the pinned requirements, the
+# interface package msg_schemas/ and the project itself (editable).
+# Each step runs only when its inputs changed (hash stamps in .venv/.stamps), so a second run
+# does nothing and takes well under a second.
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+VENV=$ROOT/.venv
+STAMPS=$VENV/.stamps
+BUILD=$VENV/build/msg_schemas
+cd "$ROOT"
+# One set-up at a time (parallel `make test` runs share the venv).
+mkdir -p build && exec 9>build/.setup.lock && flock 9
+
+say() { echo "setup: $*"; }
+
+# Short hash of stdin.
+digest() { sha256sum | cut -d' ' -f1; }
+
+# up_to_date STEP HASH: true when STEP last completed with inputs of this HASH.
+up_to_date() { [[ -f $STAMPS/$1 && $(<"$STAMPS/$1") == "$2" ]]; }
+mark_done() { mkdir -p "$STAMPS" && echo "$2" >"$STAMPS/$1"; }
+
+did_something=
+pip_install() { "$VENV/bin/python" -m pip install --disable-pip-version-check -q "$@"; }
+
+# 1. Build tools for msg_schemas/. Present on the dev machines; kept for a bare Debian.
+missing=()
+for tool in cmake ninja g++; do command -v "$tool" >/dev/null || missing+=("$tool"); done
+if ((${#missing[@]})); then
+    say "installing build tools (missing: ${missing[*]})"
+    sudo_cmd=$([[ $(id -u) == 0 ]] || echo sudo)
+    $sudo_cmd apt-get update -qq
+    $sudo_cmd env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq cmake ninja-build g++
+    did_something=1
+fi
+
+# 2. The venv (PYTHON picks another interpreter; the pins are checked with 3.11).
+if [[ ! -x $VENV/bin/python ]]; then
+    say "creating $VENV"
+    "${PYTHON:-python3}" -m venv "$VENV"
+    did_something=1
+fi
+
+# 3. Pinned requirements (the ROS wheels, the scientific stack, test tools).
+req_hash=$(sha256sum requirements/*.txt | digest)
+if ! up_to_date requirements "$req_hash"; then
+    say "installing requirements/*.txt (about 1-2 min on a fresh venv)"
+    pip_install $(printf -- '-r %s ' requirements/*.txt)
+    mark_done requirements "$req_hash"
+    did_something=1
+fi
+
+# 4. pip (re)writes the ROS wheels' CMake files with the wheel builder's include paths.
+if grep -qs /opt/python/ "$VENV"/share/*/cmake/*__rosidl_generator_pyExport.cmake; then
+    "$VENV/bin/python" tools/patch_ros_cmake.py "$VENV"
+    did_something=1
+fi
+
+# 5. The interface package, built against (and installed into) the venv prefix. Rebuilt when
+# its sources or the requirements change; the previous install is removed first so that a
+# deleted .msg does not linger.
+msg_hash=$( (echo "$req_hash"; find msg_schemas -type f | sort | xargs sha256sum) | digest)
+if ! up_to_date msg_schemas "$msg_hash"; then
+    say "building msg_schemas/ (lpa_transfer_interfaces, about 30 s)"
+    log=$VENV/build/msg_schemas.log
+    mkdir -p "$BUILD"
+    [[ -f $BUILD/install_manifest.txt ]] && xargs rm -f <"$BUILD/install_manifest.txt"
+    if ! (
+        export VIRTUAL_ENV=$VENV PATH=$VENV/bin:$PATH AMENT_PREFIX_PATH=$VENV
+        cmake -S msg_schemas -B "$BUILD" -G Ninja -DCMAKE_INSTALL_PREFIX="$VENV" \
+            -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$VENV/bin/python"
+        cmake --build "$BUILD"
+        cmake --install "$BUILD"
+    ) >"$log" 2>&1; then
+        tail -n 40 "$log"
+        say "msg_schemas/ build failed; full log: $log"
+        exit 1
+    fi
+    mark_done msg_schemas "$msg_hash"
+    did_something=1
+fi
+
+# 6. The project itself, editable, so library edits need no reinstall. Reinstalled when the
+# packaging files or this script change, or a node module gains/loses main() (console scripts).
+proj_hash=$( (sha256sum setup.py setup.cfg package.xml tools/setup.sh; grep -l '^def main' nodes/*.py 2>/dev/null || true) \
+    | digest)
+if ! up_to_date project "$proj_hash"; then
+    say "installing lpa_transfer (editable)"
+    # No build isolation: use the venv's pinned setuptools instead of fetching one each time.
+    pip_install --no-deps --no-build-isolation -e .
+    # Editable (PEP 660) installs skip data_files: link them instead, so ament_index finds the
+    # package and edits under scenarios/ show through without a reinstall.
+    share=$VENV/share/lpa_transfer index=$VENV/share/ament_index/resource_index/packages
+    mkdir -p "$share" "$index"
+    ln -sfn "$ROOT/package.xml" "$share/package.xml"
+    ln -sfn "$ROOT/scenarios" "$share/scenarios"
+    ln -sfn "$ROOT/resource/lpa_transfer" "$index/lpa_transfer"
+    mark_done project "$proj_hash"
+    did_something=1
+fi
+
+if [[ -n $did_something ]]; then say "done ($VENV)"; else say "up to date ($VENV)"; fi
