@@ -53,7 +53,8 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
     n_clusters_ : K after EM; weights_, means_, covariances_, precisions_cholesky_ : the
     mixture Π in the clustering space; A_, B_source_, B_target_, mean_source_, mean_target_ :
     the local PA parameters Φ (stacked over K); coef_ (K, D_t, D_s), intercept_ (K, D_t):
-    the composed local maps f_k; cluster_sizes_, labels_ (training assignment),
+    the composed local maps f_k; cluster_sizes_ (points each local PA was fitted on, ≥ n_min),
+    labels_ (most responsible component of each training point),
     n_init_clusters_ (K found by initEM), log_likelihood_, n_iter_, converged_,
     cluster_dims_, latent_dim_, n_features_in_, n_features_out_, n_correspondences_.
     """
@@ -124,13 +125,13 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         fitted = gmm.fit_em(space, *best[2], self.reg_covar, self.max_iter, self.tol)
         weights, means, covariances, precisions, self.log_likelihood_, self.n_iter_, \
             self.converged_ = fitted
-        labels, keep = _assign_clusters(space, weights, means, precisions, self.n_min)
-        self.weights_ = weights[keep] / weights[keep].sum()
-        self.means_, self.covariances_ = means[keep], covariances[keep]
-        self.precisions_cholesky_ = precisions[keep]
-        self.n_clusters_ = int(keep.sum())
-        counts, joint_means, joint_covs = grouped_moments(np.hstack((source, target)), labels,
-                                                          self.n_clusters_)
+        self.weights_, self.means_, self.covariances_ = weights, means, covariances
+        self.precisions_cholesky_ = precisions
+        self.n_clusters_ = len(weights)
+        labels, fit_labels, fit_rows = _cluster_members(space, weights, means, precisions,
+                                                        self.n_min)
+        counts, joint_means, joint_covs = grouped_moments(
+            np.hstack((source, target))[fit_rows], fit_labels, self.n_clusters_)
         for name, value in procrustes_maps(counts, joint_means, joint_covs, source.shape[1],
                                            d).items():
             setattr(self, f"{name}_", value)
@@ -175,22 +176,27 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         return out
 
 
-def _assign_clusters(space, weights, means, precisions, min_points):
-    """Hard-assign points to their most responsible component (§3.5, after EM).
+def _cluster_members(space, weights, means, precisions, n_min):
+    """The training points of each local PA: cluster members by highest responsibility.
 
-    EM may leave a component with fewer than ``min_points`` (= N_min, the thesis' minimum
-    cluster size) points. Such a cluster's PA interpolates its few points exactly, often with
-    huge coefficients that wreck the transfer around it (seen on the §3.6 link sweep: 820 mm
-    vs PA's 73 mm with a 5-point cluster), so the component is dropped (its weight goes to
-    the others) and the points reassigned, until every remaining cluster has N_min points. Returns labels 0..K'-1 and the
-    boolean mask of kept components.
+    Points are assigned to their most responsible component (§3.5, after EM). EM may leave a
+    component with fewer than N_min points; a PA fitted on so few points interpolates them
+    exactly, often with huge coefficients that wreck the transfer around it (seen on the §3.6
+    link sweep: 820 mm against PA's 73 mm for a 5-point cluster). Such a component's PA is
+    fitted on its N_min most responsible points instead, borrowing neighbours' points, so
+    every local map sees at least N_min correspondences and the EM solution is kept.
+    Returns ``labels`` (N,), the most responsible component of each point, and the PAs'
+    training sets as ``fit_labels`` and ``fit_rows`` (row indices, possibly repeated).
     """
-    keep = np.ones(len(weights), dtype=bool)
-    while True:
-        labels = gmm.most_responsible(space, weights[keep] / weights[keep].sum(), means[keep],
-                                      precisions[keep])
-        counts = np.bincount(labels, minlength=keep.sum())
-        if counts.min() >= min_points:
-            return labels, keep
-        kept_ids = np.flatnonzero(keep)
-        keep[kept_ids[counts < min_points]] = False
+    gamma = np.empty((len(space), len(weights)))
+    for block, resp, _ in gmm.Responsibilities(weights, means, precisions).blocks(space):
+        gamma[block] = resp
+    labels = gamma.argmax(axis=1)
+    rows = np.arange(len(space))
+    small = np.flatnonzero(np.bincount(labels, minlength=len(weights)) < n_min)
+    if len(small) == 0:
+        return labels, labels, rows
+    borrowed = np.argsort(-gamma[:, small], axis=0, kind="stable")[:n_min]     # (n_min, S)
+    members = np.isin(labels, small)
+    fit_labels = np.concatenate((labels[~members], np.tile(small, n_min)))
+    return labels, fit_labels, np.concatenate((rows[~members], borrowed.ravel()))

@@ -59,6 +59,19 @@ def test_exact_on_an_affine_relation_whatever_the_clusters():
     assert np.abs(lpa.transfer(source[:50]) - target[:50]).max() < 1e-9
 
 
+def test_every_local_map_sees_n_min_points_and_never_blows_up():
+    # Regression: after EM a 5-point cluster fitted its 4-D map exactly, with huge
+    # coefficients, and made LPA 11x worse than PA on this pair of the Fig. 3-8 sweep.
+    test_source, test_target = correspondences(5000, seed=999, target_links=(0.3, 1.0))
+    for seed in range(8):
+        source, target = correspondences(100, seed=seed, target_links=(0.3, 1.0))
+        lpa = LocalProcrustesAnalysis(random_state=seed, **LPA_2LINK).fit(source, target)
+        assert lpa.cluster_sizes_.min() >= 7
+        pa = ProcrustesAnalysis().fit(source, target)
+        assert (mapping_rmse_mm(lpa, test_source, test_target)
+                < mapping_rmse_mm(pa, test_source, test_target))
+
+
 def test_large_c_min_keeps_one_cluster_equal_to_pa():
     source, target = correspondences(200, seed=1)
     lpa = LocalProcrustesAnalysis(n_min=7, c_min=1.0).fit(source, target)
