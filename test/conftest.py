@@ -1,4 +1,5 @@
 """Shared fixtures. The library is installed editable (tools/setup.sh), so no sys.path edits."""
+import subprocess
 import sys
 from pathlib import Path
 
@@ -14,3 +15,15 @@ def project_venv():
     if Path(sys.prefix).resolve() != VENV.resolve():
         pytest.skip(f"needs the project venv {VENV} (run tools/run_tests.sh)")
     return VENV
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """Remove the shared-memory segments of Fast DDS processes the tests killed.
+
+    ``fastdds shm clean`` only removes segments whose owner process is gone, so it never
+    disturbs a live ROS graph (shared/notes/ros2-from-pypi.md).
+    """
+    fastdds = Path(sys.prefix) / "bin" / "fastdds"
+    if fastdds.exists():
+        subprocess.run([str(fastdds), "shm", "clean"], capture_output=True, timeout=60,
+                       check=False)

@@ -1,0 +1,66 @@
+"""rclpy helpers shared by the recorder and player nodes (no ``main``: not a console script)."""
+import importlib
+import signal
+import threading
+
+import rclpy
+from rclpy.exceptions import ParameterUninitializedException
+from rclpy.parameter import Parameter
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
+                       ReliabilityPolicy)
+from rclpy.signals import SignalHandlerOptions
+
+from lpa_transfer.bag import split_type_name
+
+
+def message_class(type_name):
+    """The Python class of ``pkg/msg/Type`` (rosidl_runtime_py is not available as a wheel)."""
+    package, name = split_type_name(type_name)
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+def string_array_parameter(node, name):
+    """Declare a string-array parameter without default; unset means ``[]``."""
+    node.declare_parameter(name, Parameter.Type.STRING_ARRAY)
+    try:
+        return list(node.get_parameter(name).value or [])
+    except ParameterUninitializedException:
+        return []
+
+
+def init_with_stop_event(args=None):
+    """``rclpy.init`` without rclpy's signal handlers; SIGINT/SIGTERM set the returned event.
+
+    The nodes then leave their ``spin_once`` loop themselves, drain what is queued and close
+    their files before shutting rclpy down (rclpy's own handler would shut the context first).
+    """
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    return stop
+
+
+def qos_to_dict(qos):
+    """A QoS profile as the lower-case dict ``lpa_transfer.bag.qos_profiles_yaml`` writes."""
+    return {"history": qos.history.name.lower(), "depth": qos.depth,
+            "reliability": qos.reliability.name.lower(),
+            "durability": qos.durability.name.lower(), "liveliness": qos.liveliness.name.lower()}
+
+
+def qos_from_offered(offered, depth):
+    """A keep-last QoS of ``depth`` compatible with every offered profile (dicts or QoSProfiles).
+
+    As rosbag2 does: best effort if any publisher offers only that, transient-local only if
+    every publisher offers it; with nothing offered, reliable and volatile.
+    """
+    profiles = [qos_to_dict(p) if isinstance(p, QoSProfile) else p for p in offered]
+    reliable = all(p.get("reliability") == "reliable" for p in profiles)
+    transient_local = bool(profiles) and all(
+        p.get("durability") == "transient_local" for p in profiles)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if transient_local
+                    else DurabilityPolicy.VOLATILE),
+        liveliness=LivelinessPolicy.AUTOMATIC)
