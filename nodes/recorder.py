@@ -1,0 +1,109 @@
+"""recorder: record topics into an MCAP bag (rosbag2 layout), our stand-in for ``ros2 bag record``.
+
+Parameters: ``output`` (path of the .mcap, required), ``topics`` (names to record; empty = all),
+``topic_regex`` (only topics matching it), ``exclude`` (default /rosout, /parameter_events),
+``discovery_period`` (s between graph scans for new topics, default 0.5), ``qos_depth`` (1000).
+
+Subscriptions are raw (serialized CDR), written in the callback. On SIGINT/SIGTERM the node
+stops discovery, drains messages still queued, closes the bag (readable, with summary), logs
+the per-topic counts and exits 0.
+"""
+import re
+import time
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from lpa_transfer.bag import BagWriter, header_stamp_ns
+from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
+                                          qos_to_dict, string_array_parameter)
+
+DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
+
+
+class Recorder(Node):
+    """Subscribes to every matching topic it discovers and writes what arrives to a bag."""
+
+    def __init__(self):
+        super().__init__("recorder")
+        output = self.declare_parameter("output", "").value
+        if not output:
+            raise ValueError("parameter 'output' (path of the .mcap file) is required")
+        self.topics = set(string_array_parameter(self, "topics"))
+        regex = self.declare_parameter("topic_regex", "").value
+        self.topic_regex = re.compile(regex) if regex else None
+        self.exclude = set(string_array_parameter(self, "exclude") or DEFAULT_EXCLUDE)
+        self.qos_depth = self.declare_parameter("qos_depth", 1000).value
+        period = self.declare_parameter("discovery_period", 0.5).value
+        self.bag = BagWriter(output)
+        self.subscribed = {}  # topic -> type name
+        self.discover()
+        self.discovery_timer = self.create_timer(period, self.discover)
+        self.get_logger().info(f"recording to {output}")
+
+    def wanted(self, topic):
+        return (topic not in self.exclude and (not self.topics or topic in self.topics)
+                and (self.topic_regex is None or self.topic_regex.search(topic)))
+
+    def discover(self):
+        """Subscribe to matching topics that appeared since the last scan."""
+        for topic, type_names in self.get_topic_names_and_types():
+            if topic in self.subscribed or not self.wanted(topic):
+                continue
+            if len(type_names) != 1:
+                self.get_logger().warning(f"skipping {topic}: several types {type_names}")
+                continue
+            self.subscribe(topic, type_names[0])
+
+    def subscribe(self, topic, type_name):
+        offered = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
+        self.bag.add_topic(topic, type_name, [qos_to_dict(qos) for qos in offered])
+        self.create_subscription(
+            message_class(type_name), topic,
+            lambda data, topic=topic, type_name=type_name: self.on_message(topic, type_name, data),
+            qos_from_offered(offered, self.qos_depth), raw=True)
+        self.subscribed[topic] = type_name
+        self.get_logger().info(f"subscribed to {topic} [{type_name}]")
+
+    def on_message(self, topic, type_name, data):
+        received_ns = self.get_clock().now().nanoseconds
+        self.bag.write(topic, data, received_ns, header_stamp_ns(type_name, data))
+
+    def finish(self):
+        """Close the bag and log what it holds."""
+        self.bag.close()
+        counts = ", ".join(f"{topic}: {count}" for topic, count in sorted(self.bag.counts.items()))
+        self.get_logger().info(f"closed {self.bag.path}; messages per topic: {counts or 'none'}")
+
+
+def drain(executor, recorder, quiet_s=0.3, limit_s=3.0):
+    """Spin until no message arrived for ``quiet_s`` (at most ``limit_s``)."""
+    deadline = time.monotonic() + limit_s
+    last_total, last_change = -1, time.monotonic()
+    while time.monotonic() < deadline and time.monotonic() - last_change < quiet_s:
+        executor.spin_once(timeout_sec=0.05)
+        total = sum(recorder.bag.counts.values())
+        if total != last_total:
+            last_total, last_change = total, time.monotonic()
+
+
+def main(args=None):
+    stop = init_with_stop_event(args)
+    recorder = Recorder()
+    executor = SingleThreadedExecutor()
+    executor.add_node(recorder)
+    try:
+        while rclpy.ok() and not stop.is_set():
+            executor.spin_once(timeout_sec=0.2)
+        recorder.destroy_timer(recorder.discovery_timer)
+        drain(executor, recorder)
+    finally:
+        recorder.finish()
+        executor.shutdown()
+        recorder.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()
