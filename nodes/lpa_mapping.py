@@ -11,7 +11,8 @@ Services, under the node's name (``/lpa_mapping/...`` by default), types in
 
 * ``~/fit`` (FitModel): fit a ``"pa"`` or ``"lpa"`` model on the correspondences in the
   request and store it under ``model_id``. ``latent_dim = 0`` and ``k_max = 0`` mean "no
-  limit" and an empty ``cluster_dims`` means all source dimensions (the library's ``None``);
+  limit", ``n_min = 0`` and ``n_init = 0`` the library defaults (7 and 3), and an empty
+  ``cluster_dims`` means all source dimensions (the library's ``None``);
   PA uses only ``latent_dim``. When ``source`` and ``target`` are both empty, the
   correspondences are read from ``correspondence_file``: a NumPy ``.npz`` with the arrays
   ``source`` (N, D_s) and ``target`` (N, D_t), row i of each in correspondence.
@@ -32,6 +33,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
 from lpa_transfer_nodes._ros_util import init_with_stop_event
+from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.model_store import (ModelStore, load_correspondences, matrix_from_rows,
                                       training_rmse)
 from lpa_transfer_interfaces.msg import Matrix
@@ -49,14 +51,24 @@ def from_matrix(msg, name):
     return matrix_from_rows(msg.rows, msg.cols, msg.data, name)
 
 
+LPA_DEFAULTS = LocalProcrustesAnalysis().get_params()
+
+
 def fit_hyperparameters(request):
-    """The library's hyperparameters from a FitModel request (0 / empty -> None)."""
+    """The library's hyperparameters from a FitModel request.
+
+    0 / empty mean None for latent_dim, k_max and cluster_dims, and the library default for
+    n_min and n_init (a request that leaves them unset gets a working model). c_min is taken
+    as given: 0 is meaningful ("always split", the thesis' advice to control K with n_min).
+    """
     latent_dim = request.latent_dim or None
     if request.method != "lpa":
         return dict(latent_dim=latent_dim)
-    return dict(latent_dim=latent_dim, n_min=request.n_min, c_min=request.c_min,
-                k_max=request.k_max or None, cluster_dims=list(request.cluster_dims) or None,
-                n_init=request.n_init, random_state=request.random_state)
+    return dict(latent_dim=latent_dim, n_min=request.n_min or LPA_DEFAULTS["n_min"],
+                c_min=request.c_min, k_max=request.k_max or None,
+                cluster_dims=list(request.cluster_dims) or None,
+                n_init=request.n_init or LPA_DEFAULTS["n_init"],
+                random_state=request.random_state)
 
 
 class MappingService(Node):

@@ -102,6 +102,20 @@ def test_round_trip_equals_the_library(service, data):
     assert ID in client.call("list").model_ids
 
 
+def test_minimal_lpa_request_uses_the_library_defaults(service, data):
+    client, _, _ = service
+    (source, target), test = data
+    answer = client.call("fit", model_id="minimal", method="lpa", source=matrix(source),
+                         target=matrix(target))          # n_min, n_init, c_min left at 0
+    assert answer.success, answer.message
+    info = json.loads(client.call("describe", model_id="minimal").hyperparameters_json)
+    assert (info["n_min"], info["n_init"], info["c_min"]) == (7, 3, 0.0)
+    library = LocalProcrustesAnalysis(c_min=0.0).fit(source, target)
+    transferred = client.call("transfer", model_id="minimal", source=matrix(test))
+    assert np.array_equal(points(transferred.target), library.transfer(test))
+    assert client.call("delete", model_id="minimal").success
+
+
 def test_fit_from_a_correspondence_file(service, data, tmp_path):
     client, _, _ = service
     (source, target), test = data
