@@ -10,9 +10,15 @@ A file describes a planar serial chain as in the thesis' Table 3.1 (§3.6)::
     lower = 0.0           # rad
     upper = 1.5707963
 
-with one ``[[joints]]`` table per ``[[links]]`` table (joint i moves link i). Keys not
-listed here are ignored, so files can grow (masses, inertias, ...) without breaking this
-loader.
+with one ``[[joints]]`` table per ``[[links]]`` table (joint i moves link i). Optional keys,
+needed only by the dynamics simulator (:mod:`lpa_transfer.simulator`)::
+
+    [[links]]
+    mass = 0.6            # kg, default DEFAULT_LINK_MASS (1 kg)
+    [[joints]]
+    effort = 10.0         # N·m, default DEFAULT_EFFORT_LIMIT (100 N·m)
+
+Other keys are ignored, so files can grow (inertias, ...) without breaking this loader.
 """
 import dataclasses
 import numbers
@@ -20,6 +26,11 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+
+#: Link mass (kg) when a ``[[links]]`` table has no ``mass``.
+DEFAULT_LINK_MASS = 1.0
+#: Joint effort limit (N·m) when a ``[[joints]]`` table has no ``effort`` (as planar_chain_urdf).
+DEFAULT_EFFORT_LIMIT = 100.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -30,9 +41,16 @@ class RobotParams:
     link_lengths: np.ndarray   # (n,) m
     joint_limits: np.ndarray   # (n, 2) rad, columns (lower, upper)
     source: str                # where the numbers come from (e.g. a thesis table)
+    link_masses: np.ndarray = None    # (n,) kg; None -> DEFAULT_LINK_MASS each
+    effort_limits: np.ndarray = None  # (n,) N·m; None -> DEFAULT_EFFORT_LIMIT each
 
     def __post_init__(self):
-        for field in ("link_lengths", "joint_limits"):
+        n_links = len(self.link_lengths)
+        if self.link_masses is None:
+            object.__setattr__(self, "link_masses", [DEFAULT_LINK_MASS] * n_links)
+        if self.effort_limits is None:
+            object.__setattr__(self, "effort_limits", [DEFAULT_EFFORT_LIMIT] * n_links)
+        for field in ("link_lengths", "joint_limits", "link_masses", "effort_limits"):
             array = np.array(getattr(self, field), dtype=np.float64)
             array.setflags(write=False)
             object.__setattr__(self, field, array)
@@ -59,6 +77,15 @@ def _tables(data, key, path):
     return tables
 
 
+def _optional_positive(table, key, default, where):
+    if key not in table:
+        return default
+    value = _number(table, key, where)
+    if value <= 0:
+        raise ValueError(f"{where}: key '{key}' must be positive, got {value}")
+    return value
+
+
 def load_robot_params(path):
     """Read and validate a robot parameter file; errors name the file and the key."""
     path = Path(path)
@@ -74,8 +101,10 @@ def load_robot_params(path):
     if len(links) != len(joints):
         raise ValueError(f"{path}: {len(links)} [[links]] but {len(joints)} [[joints]]; a "
                          "serial chain needs one joint per link")
-    lengths = []
+    lengths, masses, efforts = [], [], []
     for i, link in enumerate(links):
+        masses.append(_optional_positive(link, "mass", DEFAULT_LINK_MASS,
+                                         f"{path}: links[{i}]"))
         length = _number(link, "length", f"{path}: links[{i}]")
         if length <= 0:
             raise ValueError(f"{path}: links[{i}]: key 'length' must be positive, got {length}")
@@ -87,5 +116,6 @@ def load_robot_params(path):
         if lower > upper:
             raise ValueError(f"{where}: key 'lower' ({lower}) is greater than 'upper' ({upper})")
         limits.append((lower, upper))
+        efforts.append(_optional_positive(joint, "effort", DEFAULT_EFFORT_LIMIT, where))
     return RobotParams(name=data["name"], link_lengths=lengths, joint_limits=limits,
-                       source=data["source"])
+                       source=data["source"], link_masses=masses, effort_limits=efforts)

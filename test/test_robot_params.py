@@ -64,3 +64,16 @@ def test_broken_file_names_file_and_key(tmp_path, old, new, message):
     with pytest.raises(ValueError, match=message) as info:
         load_robot_params(path)
     assert str(path) in str(info.value)
+
+
+def test_masses_and_effort_limits_are_optional_with_defaults(tmp_path):
+    from lpa_transfer.robot_params import DEFAULT_EFFORT_LIMIT, DEFAULT_LINK_MASS
+
+    robot = load_robot_params(write(tmp_path, VALID.replace("length = 0.3",
+                                                            "length = 0.3\nmass = 0.7")
+                                    .replace("upper = 1.0\n[[joints]]",
+                                             "upper = 1.0\neffort = 12.5\n[[joints]]")))
+    np.testing.assert_array_equal(robot.link_masses, [0.7, DEFAULT_LINK_MASS])
+    np.testing.assert_array_equal(robot.effort_limits, [12.5, DEFAULT_EFFORT_LIMIT])
+    with pytest.raises(ValueError, match=r"links\[0\]: key 'mass' must be positive"):
+        load_robot_params(write(tmp_path, VALID.replace("length = 0.3", "length = 0.3\nmass = 0")))

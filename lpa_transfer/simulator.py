@@ -1,0 +1,232 @@
+"""A robot dynamics simulator on pybullet, for the robot_sim node (no rclpy).
+
+:class:`RobotSimulator` wraps one pybullet DIRECT client (its own client id, passed to every
+call, so several simulators in one process never interfere) and one fixed-base robot loaded
+from URDF with ``URDF_USE_INERTIA_FROM_FILE`` (otherwise pybullet recomputes the inertias
+from the collision shapes). Gravity is −9.81 m/s² along −y, as in :mod:`planar_chain`: the
+planar chains move in the vertical x-y plane.
+
+Control modes (``step`` takes one command per movable joint, in ``joint_names`` order):
+
+* ``"position"``: targets are clipped to the joint limits and tracked by pybullet's
+  POSITION_CONTROL motors with ``forces`` = the effort limits;
+* ``"torque"``: the default velocity motors are disabled first (VELOCITY_CONTROL with
+  force 0, else they brake every joint), torques are clipped to ± the effort limits —
+  pybullet does not enforce URDF effort limits — and applied with TORQUE_CONTROL at every
+  physics step (pybullet clears applied torques after each step).
+
+pybullet's artificial link damping (linear/angular 0.04 by default) is set to 0, so the
+dynamics are the URDF's (the planar chains have zero joint damping and friction). There is
+nothing random in the simulation: the same inputs give the same outputs, bit for bit.
+"""
+import os
+import tempfile
+from dataclasses import dataclass
+
+import numpy as np
+
+from lpa_transfer.planar_chain import GRAVITY, planar_chain_urdf
+
+CONTROL_MODES = ("position", "torque")
+
+
+def robot_urdf(robot):
+    """URDF text of a :class:`lpa_transfer.robot_params.RobotParams` planar chain.
+
+    Uses the file's link masses and effort limits (their defaults when the file has none).
+    """
+    return planar_chain_urdf(robot.link_lengths, robot.link_masses, robot.joint_limits,
+                             robot.effort_limits, name=robot.name)
+
+
+@dataclass(frozen=True, eq=False)
+class SimState:
+    """The robot's state at ``time`` (s of simulated time since start/reset)."""
+
+    time: float
+    positions: np.ndarray      # (n,) rad (or m for prismatic joints)
+    velocities: np.ndarray     # (n,) rad/s
+    efforts: np.ndarray        # (n,) N·m applied during the last step (clipped command in
+    #                            torque mode, the motor torque in position mode)
+    end_effector: np.ndarray   # (3,) world position of the last link's frame, m
+
+
+class RobotSimulator:
+    """One fixed-base robot in its own pybullet DIRECT client (see module docstring).
+
+    ``urdf`` is a URDF file path or the URDF text itself. ``initial_positions`` default to
+    zero clipped into the joint limits; given ones must lie within the limits. The end
+    effector is the frame of the robot's last link (the ``tool`` frame of a planar chain).
+    ``seed`` is kept for reproducible noise models; the simulation itself is deterministic.
+    """
+
+    def __init__(self, urdf, control_mode="position", physics_step=1e-3,
+                 initial_positions=None, seed=0):
+        import pybullet as p
+
+        if control_mode not in CONTROL_MODES:
+            raise ValueError(f"control_mode must be one of {CONTROL_MODES}, got {control_mode!r}")
+        if not (isinstance(physics_step, (int, float)) and np.isfinite(physics_step)
+                and physics_step > 0):
+            raise ValueError(f"physics_step must be a positive number of seconds, "
+                             f"got {physics_step!r}")
+        self._p, self.control_mode, self.physics_step = p, control_mode, float(physics_step)
+        self.seed = seed
+        self._client = p.connect(p.DIRECT)
+        try:
+            self._load(urdf)
+            self.reset(initial_positions)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- set-up -----------------------------------------------------------------------------
+    def _load(self, urdf):
+        p, cid = self._p, self._client
+        text = str(urdf)
+        if text.lstrip().startswith("<"):
+            handle, path = tempfile.mkstemp(suffix=".urdf")
+            try:
+                with os.fdopen(handle, "w") as f:
+                    f.write(text)
+                self._body = p.loadURDF(path, useFixedBase=True,
+                                        flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+            finally:
+                os.remove(path)
+        else:
+            if not os.path.isfile(text):
+                raise ValueError(f"URDF file not found: {text}")
+            self._body = p.loadURDF(text, useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
+                                    physicsClientId=cid)
+        p.setGravity(0, -GRAVITY, 0, physicsClientId=cid)
+        p.setTimeStep(self.physics_step, physicsClientId=cid)
+        n_all = p.getNumJoints(self._body, physicsClientId=cid)
+        infos = [p.getJointInfo(self._body, j, physicsClientId=cid) for j in range(n_all)]
+        movable = [info for info in infos if info[2] in (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC)]
+        if not movable:
+            raise ValueError("the robot has no revolute or prismatic joint")
+        self._joints = [info[0] for info in movable]
+        self.joint_names = [info[1].decode() for info in movable]
+        limits = []
+        for info in movable:
+            lower, upper = info[8], info[9]
+            # pybullet reports lower > upper for joints without limits (e.g. continuous).
+            limits.append((lower, upper) if lower <= upper else (-np.inf, np.inf))
+        self.joint_limits = np.array(limits, dtype=float)
+        self.effort_limits = np.array([info[10] for info in movable], dtype=float)
+        if not (self.effort_limits > 0).all():
+            bad = [n for n, e in zip(self.joint_names, self.effort_limits) if not e > 0]
+            raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
+                             f"(<limit effort=...>); the simulator needs one to clip commands")
+        self._ee_link = n_all - 1
+        for link in range(-1, n_all):
+            p.changeDynamics(self._body, link, linearDamping=0.0, angularDamping=0.0,
+                             physicsClientId=cid)
+        for array in (self.joint_limits, self.effort_limits):
+            array.setflags(write=False)
+        if self.control_mode == "torque":
+            p.setJointMotorControlArray(self._body, self._joints, p.VELOCITY_CONTROL,
+                                        targetVelocities=[0.0] * self.n_joints,
+                                        forces=[0.0] * self.n_joints, physicsClientId=cid)
+
+    @property
+    def n_joints(self):
+        return len(self._joints)
+
+    @property
+    def time(self):
+        return self._steps * self.physics_step
+
+    def _vector(self, values, name):
+        array = np.asarray(values, dtype=float)
+        if array.shape != (self.n_joints,):
+            raise ValueError(f"{name} must have {self.n_joints} values (joints "
+                             f"{', '.join(self.joint_names)}), got {array.size}")
+        if not np.isfinite(array).all():
+            raise ValueError(f"{name} contains NaN or infinite values: {array.tolist()}")
+        return array
+
+    # -- public API -------------------------------------------------------------------------
+    def reset(self, positions=None):
+        """Put the joints at ``positions`` (default: zero clipped into the limits), at rest,
+        and the clock at 0; in position mode the motors then hold that pose."""
+        if positions is None or len(positions) == 0:
+            q = np.clip(np.zeros(self.n_joints), self.joint_limits[:, 0], self.joint_limits[:, 1])
+        else:
+            q = self._vector(positions, "initial positions")
+            outside = (q < self.joint_limits[:, 0]) | (q > self.joint_limits[:, 1])
+            if outside.any():
+                raise ValueError(f"initial positions {q.tolist()} outside the joint limits "
+                                 f"{self.joint_limits.tolist()}")
+        p, cid = self._p, self._client
+        for joint, value in zip(self._joints, q):
+            p.resetJointState(self._body, joint, float(value), 0.0, physicsClientId=cid)
+        self._steps, self._efforts = 0, np.zeros(self.n_joints)
+        if self.control_mode == "position":
+            self._target = q
+            p.setJointMotorControlArray(self._body, self._joints, p.POSITION_CONTROL,
+                                        targetPositions=q.tolist(),
+                                        forces=self.effort_limits.tolist(), physicsClientId=cid)
+        return self.state()
+
+    def step(self, command, n_substeps=1):
+        """Apply ``command`` (positions or torques, see module docstring), advance
+        ``n_substeps`` physics steps (0 counts as 1), return the new :class:`SimState`.
+
+        Raises ValueError for a command of the wrong length or with NaN/inf, before
+        touching the simulation.
+        """
+        command = self._vector(command, "command")
+        n_substeps = max(1, int(n_substeps))
+        p, cid, body, joints = self._p, self._client, self._body, self._joints
+        if self.control_mode == "position":
+            target = np.clip(command, self.joint_limits[:, 0], self.joint_limits[:, 1])
+            self._target = target
+            p.setJointMotorControlArray(body, joints, p.POSITION_CONTROL,
+                                        targetPositions=target.tolist(),
+                                        forces=self.effort_limits.tolist(), physicsClientId=cid)
+            for _ in range(n_substeps):
+                p.stepSimulation(physicsClientId=cid)
+            self._efforts = np.array([s[3] for s in p.getJointStates(body, joints,
+                                                                    physicsClientId=cid)])
+        else:
+            torques = np.clip(command, -self.effort_limits, self.effort_limits)
+            for _ in range(n_substeps):
+                p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL,
+                                            forces=torques.tolist(), physicsClientId=cid)
+                p.stepSimulation(physicsClientId=cid)
+            self._efforts = torques
+        self._steps += n_substeps
+        return self.state()
+
+    def state(self):
+        """The current :class:`SimState` (read-only arrays)."""
+        p, cid = self._p, self._client
+        joint_states = p.getJointStates(self._body, self._joints, physicsClientId=cid)
+        ee = p.getLinkState(self._body, self._ee_link, computeForwardKinematics=True,
+                            physicsClientId=cid)[4]
+        arrays = [np.array([s[0] for s in joint_states]), np.array([s[1] for s in joint_states]),
+                  np.array(self._efforts, dtype=float), np.array(ee, dtype=float)]
+        for array in arrays:
+            array.setflags(write=False)
+        return SimState(self.time, *arrays)
+
+    def close(self):
+        """Disconnect the pybullet client (idempotent)."""
+        if getattr(self, "_client", None) is not None:
+            try:
+                self._p.disconnect(physicsClientId=self._client)
+            finally:
+                self._client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass

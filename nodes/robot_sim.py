@@ -1,0 +1,186 @@
+"""robot_sim: a simulated robot (pybullet, :mod:`lpa_transfer.simulator`) on ROS 2.
+
+Run: ``robot_sim --ros-args -p robot:=scenarios/robots/two_link_source.toml`` (or
+``python -m lpa_transfer_nodes.robot_sim ...``).
+
+Parameters:
+
+* ``robot``: a robot parameter file (``scenarios/robots/*.toml``); the URDF is generated from
+  it (:func:`lpa_transfer.simulator.robot_urdf`). Or ``urdf``: a URDF file. Exactly one.
+* ``control_mode``: ``"position"`` (default; commands are joint targets) or ``"torque"``.
+* ``physics_step`` (s, default 0.001): the pybullet time step.
+* ``control_rate`` (Hz, default 100): free-running mode only, see below.
+* ``initial_positions`` (double array, default: zero clipped into the joint limits).
+* ``seed`` (int, default 0): passed to the simulator (which is deterministic).
+* ``lockstep`` (bool, default true).
+
+Lock-step mode (default): the service ``~/step`` (lpa_transfer_interfaces/srv/StepRobot)
+applies a command, advances ``n_steps`` physics steps and answers with the new state. Why:
+the experiments (babbling, demonstrations, evaluating transferred models) should run faster
+than real time and give the same numbers on every run. When the caller advances the
+simulation, nothing depends on timers, CPU load or DDS latency: the same sequence of
+requests always yields the same trajectory, as fast as the machine can compute it.
+
+Free-running mode (``lockstep:=false``): a timer at ``control_rate`` advances the simulation
+by ``round(1 / (control_rate * physics_step))`` physics steps (≥ 1), so simulated time tracks
+wall time, with the latest command received on ``joint_commands``
+(std_msgs/Float64MultiArray). Until the first command the robot holds its initial pose
+(position mode) or gets zero torques (torque mode). Bad commands are logged and ignored.
+
+Both modes publish after each advance: ``joint_states`` (sensor_msgs/JointState: name,
+position, velocity, effort = the applied torque; header.stamp = simulated time) and
+``end_effector`` (geometry_msgs/PointStamped, frame ``world``, same stamp).
+
+A bad request (wrong command length, NaN/inf) is answered with ``success=false`` and a message
+saying what was wrong; the simulation is not touched and the node keeps serving.
+"""
+import math
+import os
+import traceback
+
+import rclpy
+from rclpy.exceptions import ParameterUninitializedException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, PointStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer_interfaces.srv import StepRobot
+from lpa_transfer_nodes._ros_util import init_with_stop_event
+
+WORLD_FRAME = "world"
+
+
+def sim_stamp(seconds):
+    """A builtin_interfaces/Time of a simulated time in seconds."""
+    nanoseconds = int(round(seconds * 1e9))
+    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
+
+
+class RobotSim(Node):
+    def __init__(self):
+        super().__init__("robot_sim")
+        robot = self.declare_parameter("robot", "").value
+        urdf = self.declare_parameter("urdf", "").value
+        control_mode = self.declare_parameter("control_mode", "position").value
+        physics_step = float(self.declare_parameter("physics_step", 1e-3).value)
+        control_rate = float(self.declare_parameter("control_rate", 100.0).value)
+        self.declare_parameter("initial_positions", Parameter.Type.DOUBLE_ARRAY)
+        try:
+            initial = list(self.get_parameter("initial_positions").value or []) or None
+        except ParameterUninitializedException:
+            initial = None
+        seed = int(self.declare_parameter("seed", 0).value)
+        self.lockstep = bool(self.declare_parameter("lockstep", True).value)
+
+        if bool(robot) == bool(urdf):
+            raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "
+                             "and 'urdf' (a URDF file)")
+        if robot:
+            description = robot_urdf(load_robot_params(os.path.expanduser(robot)))
+        else:
+            description = os.path.expanduser(urdf)
+        self.sim = RobotSimulator(description, control_mode=control_mode,
+                                  physics_step=physics_step, initial_positions=initial,
+                                  seed=seed)
+        self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
+        self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
+        mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
+        if self.lockstep:
+            self.create_service(StepRobot, "~/step", self.step_service)
+        else:
+            if not (math.isfinite(control_rate) and control_rate > 0):
+                raise ValueError(f"control_rate must be a positive number of Hz, "
+                                 f"got {control_rate}")
+            self.substeps = max(1, round(1.0 / (control_rate * physics_step)))
+            state = self.sim.state()
+            self.command = (list(state.positions) if control_mode == "position"
+                            else [0.0] * self.sim.n_joints)
+            self.create_subscription(Float64MultiArray, "joint_commands", self.on_command, 10)
+            self.create_timer(1.0 / control_rate, self.on_timer)
+        self.get_logger().info(
+            f"simulating {robot or urdf} ({control_mode} control, joints "
+            f"{self.sim.joint_names}, physics step {physics_step} s), {mode}")
+        self.publish(self.sim.state())
+
+    def joint_state(self, state):
+        msg = JointState()
+        msg.header.stamp = sim_stamp(state.time)
+        msg.name = list(self.sim.joint_names)
+        msg.position, msg.velocity, msg.effort = (
+            [float(v) for v in values]
+            for values in (state.positions, state.velocities, state.efforts))
+        return msg
+
+    def publish(self, state):
+        joint_state = self.joint_state(state)
+        self.joint_state_pub.publish(joint_state)
+        point = PointStamped()
+        point.header.stamp, point.header.frame_id = joint_state.header.stamp, WORLD_FRAME
+        point.point = Point(x=float(state.end_effector[0]), y=float(state.end_effector[1]),
+                            z=float(state.end_effector[2]))
+        self.end_effector_pub.publish(point)
+        return joint_state, point.point
+
+    def step_service(self, request, response):
+        try:
+            state = self.sim.step(list(request.command), request.n_steps)
+        except ValueError as exc:
+            response.success, response.message = False, str(exc)
+            response.sim_time = self.sim.time
+            return response
+        except Exception as exc:  # keep serving; the traceback goes to the log
+            self.get_logger().error(traceback.format_exc())
+            response.success, response.message = False, f"internal error: {exc!r}"
+            response.sim_time = self.sim.time
+            return response
+        response.joint_state, response.end_effector = self.publish(state)
+        response.success, response.sim_time = True, state.time
+        response.message = f"advanced {max(1, request.n_steps)} step(s) to t={state.time:.6f} s"
+        return response
+
+    def on_command(self, msg):
+        command = list(msg.data)
+        if len(command) != self.sim.n_joints or not all(map(math.isfinite, command)):
+            self.get_logger().warning(
+                f"ignoring joint command {command}: needs {self.sim.n_joints} finite values "
+                f"(joints {self.sim.joint_names})", throttle_duration_sec=1.0)
+            return
+        self.command = command
+
+    def on_timer(self):
+        self.publish(self.sim.step(self.command, self.substeps))
+
+    def destroy_node(self):
+        self.sim.close()
+        super().destroy_node()
+
+
+def main(args=None):
+    stop = init_with_stop_event(args)
+    try:
+        node = RobotSim()
+    except Exception as exc:
+        rclpy.logging.get_logger("robot_sim").fatal(f"cannot start: {exc}")
+        rclpy.try_shutdown()
+        raise SystemExit(1) from None
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok() and not stop.is_set():
+            executor.spin_once(timeout_sec=0.2)
+    except ExternalShutdownException:
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    main()

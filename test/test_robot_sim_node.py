@@ -1,0 +1,160 @@
+"""The robot_sim node as a separate process over real DDS: lock-step stepping, joint_states
+with simulated-time stamps, bad requests, clean exit on SIGINT."""
+import math
+import signal
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from lpa_transfer.kinematics import planar_forward_kinematics
+from lpa_transfer.robot_params import load_robot_params
+from ros_harness import NodeProcess, call_service, ros_params, unique_domain_id, wait_until
+
+rclpy = pytest.importorskip("rclpy")
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+
+from lpa_transfer_interfaces.srv import StepRobot  # noqa: E402
+
+ROBOT = ROOT / "scenarios" / "robots" / "two_link_source.toml"
+LENGTHS = load_robot_params(ROBOT).link_lengths
+
+
+class SimClient:
+    """A step client and a joint_states subscriber in this process, on their own context."""
+
+    def __init__(self, domain_id):
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node("robot_sim_test_client", context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.client = self.node.create_client(StepRobot, "/robot_sim/step")
+        self.joint_states = []
+        self.node.create_subscription(JointState, "/joint_states", self.joint_states.append, 50)
+
+    def step(self, command, n_steps):
+        return call_service(self.node, self.executor, self.client,
+                            StepRobot.Request(command=[float(c) for c in command],
+                                              n_steps=n_steps))
+
+    def spin_until(self, predicate, timeout=5.0):
+        def spun():
+            self.executor.spin_once(timeout_sec=0.05)
+            return predicate()
+        return wait_until(spun, timeout=timeout, period=0, what="joint_states")
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.shutdown(context=self.context)
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    domain_id = unique_domain_id()
+    node = NodeProcess("robot_sim", domain_id, tmp_path_factory.mktemp("robot_sim"),
+                       ros_params(robot=ROBOT, physics_step=0.001, lockstep=True))
+    client = SimClient(domain_id)
+    try:
+        yield node, client
+    finally:
+        client.close()
+        node.stop()
+
+
+def stamp_seconds(stamp):
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def test_lockstep_step_moves_towards_the_commanded_pose(sim):
+    node, client = sim
+    target = np.array([0.6, 1.2])
+    errors, t = [], 0.0
+    for _ in range(3):
+        response = client.step(target, 500)
+        assert response.success, response.message
+        q = np.array(response.joint_state.position)
+        errors.append(np.abs(q - target).max())
+        assert response.sim_time == pytest.approx(t + 0.5, abs=1e-9)
+        t = response.sim_time
+        assert list(response.joint_state.name) == ["joint1", "joint2"]
+        assert stamp_seconds(response.joint_state.header.stamp) == pytest.approx(t, abs=1e-9)
+        ee = response.end_effector
+        expected = planar_forward_kinematics(q[None], LENGTHS)[0]
+        assert abs(ee.x - expected[0]) <= 1e-6 and abs(ee.y - expected[1]) <= 1e-6
+        assert abs(ee.z) <= 1e-6
+    assert errors[-1] < 1e-2 and errors[-1] <= errors[0], errors
+
+
+def test_joint_states_are_published_with_sim_time_stamps(sim):
+    node, client = sim
+    # DDS discovery of the subscriber can lag the first request: step until messages arrive.
+    for _ in range(50):
+        assert client.step([0.3, 0.4], 10).success
+        client.executor.spin_once(timeout_sec=0.05)
+        if client.joint_states:
+            break
+    n_before = len(client.joint_states)
+    response = client.step([0.3, 0.4], 10)
+    client.spin_until(lambda: len(client.joint_states) > n_before)
+    last = client.joint_states[-1]
+    assert stamp_seconds(last.header.stamp) == pytest.approx(response.sim_time, abs=1e-9)
+    np.testing.assert_array_equal(last.position, response.joint_state.position)
+    assert len(last.effort) == 2 and all(math.isfinite(e) for e in last.effort)
+
+
+@pytest.mark.parametrize("command, message", [([0.1], "must have 2 values"),
+                                              ([0.1, 0.2, 0.3], "must have 2 values"),
+                                              ([math.nan, 0.1], "NaN or infinite"),
+                                              ([0.1, math.inf], "NaN or infinite")])
+def test_bad_command_fails_and_the_next_request_works(sim, command, message):
+    node, client = sim
+    before = client.step([0.5, 0.5], 1).sim_time
+    bad = client.step(command, 10)
+    assert not bad.success and message in bad.message
+    assert bad.sim_time == pytest.approx(before, abs=1e-12)
+    good = client.step([0.5, 0.5], 10)
+    assert good.success, good.message
+    assert good.sim_time == pytest.approx(before + 0.01, abs=1e-9)
+    assert node.alive()
+
+
+def test_zero_steps_counts_as_one(sim):
+    node, client = sim
+    before = client.step([0.5, 0.5], 1).sim_time
+    assert client.step([0.5, 0.5], 0).sim_time == pytest.approx(before + 0.001, abs=1e-9)
+
+
+def test_free_running_mode_follows_joint_commands(tmp_path):
+    from std_msgs.msg import Float64MultiArray
+
+    domain_id = unique_domain_id()
+    with NodeProcess("robot_sim", domain_id, tmp_path,
+                     ros_params(robot=ROBOT, lockstep=False, control_rate=100.0)) as node:
+        client = SimClient(domain_id)
+        try:
+            publisher = client.node.create_publisher(Float64MultiArray, "/joint_commands", 10)
+            client.spin_until(lambda: client.joint_states, timeout=10)
+
+            def reached():
+                publisher.publish(Float64MultiArray(data=[0.4, 0.9]))
+                last = client.joint_states[-1].position
+                return np.abs(np.array(last) - [0.4, 0.9]).max() < 1e-2
+
+            client.spin_until(reached, timeout=10)
+            stamps = [stamp_seconds(m.header.stamp) for m in client.joint_states[-5:]]
+            # Each tick advances 1 / (100 Hz * 1 ms) = 10 physics steps (0.01 s of sim time).
+            ticks = np.diff(stamps) / 0.01
+            assert (ticks >= 1 - 1e-6).all(), stamps
+            np.testing.assert_allclose(ticks, np.round(ticks), atol=1e-6)
+            assert node.stop() == 0, node.log()
+        finally:
+            client.close()
+
+
+def test_sigint_exits_cleanly(sim):
+    node, client = sim
+    client.step([0.5, 0.5], 1)
+    assert node.stop(signal.SIGINT, timeout=10) == 0, node.log()
