@@ -4,6 +4,7 @@ import signal
 import threading
 
 import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.parameter import Parameter
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
@@ -64,3 +65,21 @@ def qos_from_offered(offered, depth):
         durability=(DurabilityPolicy.TRANSIENT_LOCAL if transient_local
                     else DurabilityPolicy.VOLATILE),
         liveliness=LivelinessPolicy.AUTOMATIC)
+
+
+def spin_until_stopped(node, stop):
+    """Serve ``node`` until SIGINT/SIGTERM sets ``stop``, then clean up and shut rclpy down.
+
+    A ``spin_once`` loop, not ``rclpy.spin`` (which can ignore signals in rclpy 7.1).
+    """
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok() and not stop.is_set():
+            executor.spin_once(timeout_sec=0.2)
+    except ExternalShutdownException:
+        pass
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()

@@ -28,11 +28,9 @@ import json
 import time
 import traceback
 
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import init_with_stop_event
+from lpa_transfer_nodes._ros_util import init_with_stop_event, spin_until_stopped
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.model_store import (ModelStore, load_correspondences, matrix_from_rows,
                                       training_rmse)
@@ -145,18 +143,7 @@ class MappingService(Node):
 
 def main(args=None):
     stop = init_with_stop_event(args)
-    node = MappingService()
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        while rclpy.ok() and not stop.is_set():
-            executor.spin_once(timeout_sec=0.2)
-    except ExternalShutdownException:
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_stopped(MappingService(), stop)
 
 
 if __name__ == "__main__":

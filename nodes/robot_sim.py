@@ -40,7 +40,6 @@ import traceback
 
 import rclpy
 from rclpy.exceptions import ParameterUninitializedException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from builtin_interfaces.msg import Time
@@ -51,7 +50,7 @@ from std_msgs.msg import Float64MultiArray
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import StepRobot
-from lpa_transfer_nodes._ros_util import init_with_stop_event
+from lpa_transfer_nodes._ros_util import init_with_stop_event, spin_until_stopped
 
 WORLD_FRAME = "world"
 
@@ -169,17 +168,7 @@ def main(args=None):
         rclpy.logging.get_logger("robot_sim").fatal(f"cannot start: {exc}")
         rclpy.try_shutdown()
         raise SystemExit(1) from None
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
-    try:
-        while rclpy.ok() and not stop.is_set():
-            executor.spin_once(timeout_sec=0.2)
-    except ExternalShutdownException:
-        pass
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_until_stopped(node, stop)
 
 
 if __name__ == "__main__":
