@@ -97,12 +97,12 @@ def log_likelihoods(X, weights, means, precisions_chol):
     return out
 
 
-def most_responsible(X, weights, means, precisions_chol):
-    """Index of the component with the highest responsibility for every row of X."""
-    labels = np.empty(len(X), dtype=np.intp)
+def responsibilities(X, weights, means, precisions_chol):
+    """γ_k(x) (eq. 3.9/3.11) of every row of X for every component: (N, K)."""
+    out = np.empty((len(X), len(weights)))
     for rows, resp, _ in Responsibilities(weights, means, precisions_chol).blocks(X):
-        labels[rows] = resp.argmax(axis=1)
-    return labels
+        out[rows] = resp
+    return out
 
 
 def mean_log_likelihood(X, weights, means, covariances):

@@ -72,7 +72,7 @@ def init_em(source, target, cluster_space, c_min, n_min, k_max, latent_dim, rng)
     while splittable.any() and len(splittable) < k_max:
         n_clusters = len(splittable)
         counts, means, covariances = grouped_moments(joint, labels, n_clusters)
-        maps = procrustes_maps(counts, means, covariances, n_source_dims, latent_dim)
+        maps = procrustes_maps(means, covariances, n_source_dims, latent_dim)
         errors = cluster_errors(source, target, labels, maps, counts)
         splittable &= (errors > c_min) & (counts >= 2 * n_min)
         candidates = np.flatnonzero(splittable)

@@ -18,6 +18,7 @@ from .procrustes import grouped_moments, procrustes_maps
 #: Responsibilities below this contribute less than double precision to eq. 3.12.
 _NEGLIGIBLE_RESPONSIBILITY = 1e-17
 
+
 class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
     """Local Procrustes Analysis (Alg. 3-5).
 
@@ -132,7 +133,7 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
                                                         self.n_min)
         counts, joint_means, joint_covs = grouped_moments(
             np.hstack((source, target))[fit_rows], fit_labels, self.n_clusters_)
-        for name, value in procrustes_maps(counts, joint_means, joint_covs, source.shape[1],
+        for name, value in procrustes_maps(joint_means, joint_covs, source.shape[1],
                                            d).items():
             setattr(self, f"{name}_", value)
         self.cluster_sizes_, self.labels_, self.cluster_dims_ = counts, labels, cluster_dims
@@ -141,18 +142,13 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         self.n_correspondences_ = len(source)
         return self
 
-    def _responsibility_blocks(self, source):
-        responsibilities = gmm.Responsibilities(self.weights_, self.means_,
-                                                self.precisions_cholesky_)
-        return responsibilities.blocks(source[:, self.cluster_dims_])
-
     def responsibilities(self, source):
         """γ_k of each source point (M, K), computed in the clustering space (eq. 3.11)."""
-        source = check.as_transfer_input(self, source)
-        out = np.empty((len(source), self.n_clusters_))
-        for rows, resp, _ in self._responsibility_blocks(source):
-            out[rows] = resp
-        return out
+        return self._responsibilities(check.as_transfer_input(self, source))
+
+    def _responsibilities(self, source):
+        return gmm.responsibilities(source[:, self.cluster_dims_], self.weights_, self.means_,
+                                    self.precisions_cholesky_)
 
     def transfer(self, source):
         """Map source points (M, D_s) to the target domain (M, D_t) (Alg. 4, eq. 3.12).
@@ -161,8 +157,8 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         dominant γ ≥ 1/K) are skipped, so each local map f_k is evaluated only on the points
         it is responsible for.
         """
-        gamma = self.responsibilities(source)
-        source = np.asarray(source, dtype=np.float64)
+        source = check.as_transfer_input(self, source)
+        gamma = self._responsibilities(source)
         points, components = np.nonzero(gamma >= _NEGLIGIBLE_RESPONSIBILITY)
         order = np.argsort(components, kind="stable")
         points, components = points[order], components[order]
@@ -188,9 +184,7 @@ def _cluster_members(space, weights, means, precisions, n_min):
     Returns ``labels`` (N,), the most responsible component of each point, and the PAs'
     training sets as ``fit_labels`` and ``fit_rows`` (row indices, possibly repeated).
     """
-    gamma = np.empty((len(space), len(weights)))
-    for block, resp, _ in gmm.Responsibilities(weights, means, precisions).blocks(space):
-        gamma[block] = resp
+    gamma = gmm.responsibilities(space, weights, means, precisions)
     labels = gamma.argmax(axis=1)
     rows = np.arange(len(space))
     small = np.flatnonzero(np.bincount(labels, minlength=len(weights)) < n_min)

@@ -66,7 +66,7 @@ def pca_whitening(covariances, latent_dim):
     return B, B_pinv
 
 
-def procrustes_maps(counts, means, covariances, n_source_dims, latent_dim):
+def procrustes_maps(means, covariances, n_source_dims, latent_dim):
     """Alg. 1 for K clusters at once, from the joint moments of z = (z_s, z_t).
 
     ``means`` (K, D_s + D_t) and ``covariances`` (K, D_s + D_t, D_s + D_t) come from
@@ -125,8 +125,8 @@ class ProcrustesAnalysis(SavableModel, BaseEstimator):
         source, target = check.as_correspondences(
             source, target, (d + 1, f"latent_dim + 1 = {d + 1} to estimate the PCA"))
         Z = np.hstack((source, target))
-        counts, means, covs = grouped_moments(Z, np.zeros(len(Z), dtype=np.intp), 1)
-        params = procrustes_maps(counts, means, covs, source.shape[1], d)
+        _, means, covs = grouped_moments(Z, np.zeros(len(Z), dtype=np.intp), 1)
+        params = procrustes_maps(means, covs, source.shape[1], d)
         for name, value in params.items():
             setattr(self, f"{name}_", value[0])
         self.latent_dim_ = d

@@ -94,7 +94,7 @@ def test_cluster_error_is_eq_3_15():
     labels = (source[:, 0] > np.median(source[:, 0])).astype(np.intp)
     joint = np.hstack((source, target))
     counts, means, covs = grouped_moments(joint, labels, 2)
-    maps = procrustes_maps(counts, means, covs, 4, 4)
+    maps = procrustes_maps(means, covs, 4, 4)
     errors = cluster_errors(source, target, labels, maps, counts)
     for k in range(2):
         pa = ProcrustesAnalysis().fit(source[labels == k], target[labels == k])
