@@ -117,31 +117,48 @@ def babbling_trajectory(n_joints, times, seed, joint_limits=None):
     return q, qd, qdd
 
 
+def load_fixed_robot(p, urdf, client):
+    """Load a URDF (file path or URDF text) fixed to the world into pybullet ``client``.
+
+    With ``URDF_USE_INERTIA_FROM_FILE`` (else pybullet recomputes inertias from collision
+    shapes) and gravity −9.81 m/s² along −y (the chains move in the vertical x-y plane). URDF
+    text goes through a temporary file, removed again. Returns the body id.
+    """
+    text = str(urdf)
+    if not text.lstrip().startswith("<"):
+        if not os.path.isfile(text):
+            raise ValueError(f"URDF file not found: {text}")
+        path, temporary = text, False
+    else:
+        handle, path = tempfile.mkstemp(suffix=".urdf")
+        temporary = True
+        with os.fdopen(handle, "w") as f:
+            f.write(text)
+    try:
+        p.setGravity(0, -GRAVITY, 0, physicsClientId=client)
+        return p.loadURDF(path, useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
+                          physicsClientId=client)
+    finally:
+        if temporary:
+            os.remove(path)
+
+
 def inverse_dynamics(link_lengths, link_masses, q, qd, qdd, joint_limits=None):
     """τ (T, n) of eq. 5.1 for each row of (q, q̇, q̈), by ``p.calculateInverseDynamics``.
 
-    A private pybullet DIRECT session is opened and closed per call; the URDF goes through
-    a temporary file loaded with ``URDF_USE_INERTIA_FROM_FILE``; gravity is −9.81 along y.
+    A private pybullet DIRECT session is opened and closed per call (:func:`load_fixed_robot`).
     """
     import pybullet as p
 
     urdf = planar_chain_urdf(link_lengths, link_masses, joint_limits)
-    handle, path = tempfile.mkstemp(suffix=".urdf")
-    client = None
+    client = p.connect(p.DIRECT)
     try:
-        with os.fdopen(handle, "w") as f:
-            f.write(urdf)
-        client = p.connect(p.DIRECT)
-        p.setGravity(0, -GRAVITY, 0, physicsClientId=client)
-        body = p.loadURDF(path, useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
-                          physicsClientId=client)
+        body = load_fixed_robot(p, urdf, client)
         return np.array([p.calculateInverseDynamics(body, list(a), list(b), list(c),
                                                     physicsClientId=client)
                          for a, b, c in zip(q, qd, qdd)]).reshape(len(q), -1)
     finally:
-        if client is not None:
-            p.disconnect(physicsClientId=client)
-        os.remove(path)
+        p.disconnect(physicsClientId=client)
 
 
 def inverse_dynamics_babbling(link_lengths, link_masses, duration_s, rate_hz, seed,

@@ -19,13 +19,11 @@ pybullet's artificial link damping (linear/angular 0.04 by default) is set to 0,
 dynamics are the URDF's (the planar chains have zero joint damping and friction). There is
 nothing random in the simulation: the same inputs give the same outputs, bit for bit.
 """
-import os
-import tempfile
 from dataclasses import dataclass
 
 import numpy as np
 
-from lpa_transfer.planar_chain import GRAVITY, planar_chain_urdf
+from lpa_transfer.planar_chain import load_fixed_robot, planar_chain_urdf
 
 CONTROL_MODES = ("position", "torque")
 
@@ -83,22 +81,7 @@ class RobotSimulator:
     # -- set-up -----------------------------------------------------------------------------
     def _load(self, urdf):
         p, cid = self._p, self._client
-        text = str(urdf)
-        if text.lstrip().startswith("<"):
-            handle, path = tempfile.mkstemp(suffix=".urdf")
-            try:
-                with os.fdopen(handle, "w") as f:
-                    f.write(text)
-                self._body = p.loadURDF(path, useFixedBase=True,
-                                        flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
-            finally:
-                os.remove(path)
-        else:
-            if not os.path.isfile(text):
-                raise ValueError(f"URDF file not found: {text}")
-            self._body = p.loadURDF(text, useFixedBase=True, flags=p.URDF_USE_INERTIA_FROM_FILE,
-                                    physicsClientId=cid)
-        p.setGravity(0, -GRAVITY, 0, physicsClientId=cid)
+        self._body = load_fixed_robot(p, urdf, cid)
         p.setTimeStep(self.physics_step, physicsClientId=cid)
         n_all = p.getNumJoints(self._body, physicsClientId=cid)
         infos = [p.getJointInfo(self._body, j, physicsClientId=cid) for j in range(n_all)]
