@@ -1,7 +1,9 @@
-"""rclpy helpers shared by the recorder and player nodes (no ``main``: not a console script)."""
+"""rclpy helpers shared by the nodes (no ``main``: not a console script)."""
 import importlib
 import signal
 import threading
+import time
+import traceback
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -20,13 +22,36 @@ def message_class(type_name):
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
-def string_array_parameter(node, name):
-    """Declare a string-array parameter without default; unset means ``[]``."""
-    node.declare_parameter(name, Parameter.Type.STRING_ARRAY)
+def array_parameter(node, name, parameter_type=Parameter.Type.STRING_ARRAY):
+    """Declare an array parameter without default (rclpy cannot infer the type of ``[]``);
+    unset means ``[]``."""
+    node.declare_parameter(name, parameter_type)
     try:
         return list(node.get_parameter(name).value or [])
     except ParameterUninitializedException:
         return []
+
+
+def answering(node, name, handler):
+    """A service callback around ``handler(request, response) -> message``.
+
+    Fills ``success`` and ``message``: the handler's message, or ``success=false`` with the
+    ValueError's text (a bad request), or with "internal error" for anything else, whose
+    traceback is logged. Either way the node keeps serving.
+    """
+    def callback(request, response):
+        start = time.perf_counter()
+        try:
+            response.message = handler(request, response)
+            response.success = True
+        except ValueError as exc:
+            response.success, response.message = False, str(exc)
+        except Exception as exc:  # keep serving whatever happens; the log has the trace
+            node.get_logger().error(f"{name} failed:\n{traceback.format_exc()}")
+            response.success, response.message = False, f"internal error: {exc!r}"
+        node.get_logger().debug(f"{name} handled in {1000 * (time.perf_counter() - start):.2f} ms")
+        return response
+    return callback
 
 
 def init_with_stop_event(args=None):

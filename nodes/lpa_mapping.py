@@ -25,12 +25,10 @@ error is logged and answered the same way, so the node keeps serving.
 """
 import array
 import json
-import time
-import traceback
 
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import init_with_stop_event, spin_until_stopped
+from lpa_transfer_nodes._ros_util import answering, init_with_stop_event, spin_until_stopped
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.model_store import (ModelStore, load_correspondences, matrix_from_rows,
                                       training_rmse)
@@ -82,26 +80,9 @@ class MappingService(Node):
                 ("fit", FitModel, self.fit), ("transfer", TransferPoints, self.transfer),
                 ("list", ListModels, self.list), ("describe", DescribeModel, self.describe),
                 ("delete", DeleteModel, self.delete)):
-            self.create_service(srv_type, f"~/{name}", self._answering(name, handler))
+            self.create_service(srv_type, f"~/{name}", answering(self, name, handler))
         self.get_logger().info(f"serving {len(self.store.ids())} models from "
                                f"{self.store.directory}: {self.store.ids()}")
-
-    def _answering(self, name, handler):
-        """Wrap a handler: success=true with its message, or success=false with the error."""
-        def callback(request, response):
-            start = time.perf_counter()
-            try:
-                response.message = handler(request, response)
-                response.success = True
-            except ValueError as exc:
-                response.success, response.message = False, str(exc)
-            except Exception as exc:  # keep serving whatever happens; the log has the trace
-                self.get_logger().error(f"{name} failed:\n{traceback.format_exc()}")
-                response.success, response.message = False, f"internal error: {exc!r}"
-            self.get_logger().debug(
-                f"{name} handled in {1000 * (time.perf_counter() - start):.2f} ms")
-            return response
-        return callback
 
     def fit(self, request, response):
         if request.source.data or request.target.data or not request.correspondence_file:

@@ -19,7 +19,7 @@ import yaml
 
 from lpa_transfer.bag import read_messages, summary
 from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
-                                          string_array_parameter)
+                                          array_parameter)
 
 
 def parse_remaps(entries):
@@ -48,8 +48,8 @@ class Player(Node):
         self.min_subscribers = self.declare_parameter("wait_for_subscribers", 0).value
         self.wait_timeout = self.declare_parameter("wait_timeout", 10.0).value
         depth = self.declare_parameter("qos_depth", 1000).value
-        remaps = parse_remaps(string_array_parameter(self, "remap"))
-        wanted = set(string_array_parameter(self, "topics"))
+        remaps = parse_remaps(array_parameter(self, "remap"))
+        wanted = set(array_parameter(self, "topics"))
         self.topic_info = {topic: info for topic, info in summary(self.input).items()
                            if not wanted or topic in wanted}
         self.publishers_by_topic = {

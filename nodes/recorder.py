@@ -17,7 +17,7 @@ from rclpy.node import Node
 
 from lpa_transfer.bag import BagWriter, header_stamp_ns
 from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
-                                          qos_to_dict, string_array_parameter)
+                                          qos_to_dict, array_parameter)
 
 DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
 
@@ -30,10 +30,10 @@ class Recorder(Node):
         output = self.declare_parameter("output", "").value
         if not output:
             raise ValueError("parameter 'output' (path of the .mcap file) is required")
-        self.topics = set(string_array_parameter(self, "topics"))
+        self.topics = set(array_parameter(self, "topics"))
         regex = self.declare_parameter("topic_regex", "").value
         self.topic_regex = re.compile(regex) if regex else None
-        self.exclude = set(string_array_parameter(self, "exclude") or DEFAULT_EXCLUDE)
+        self.exclude = set(array_parameter(self, "exclude") or DEFAULT_EXCLUDE)
         self.qos_depth = self.declare_parameter("qos_depth", 1000).value
         period = self.declare_parameter("discovery_period", 0.5).value
         self.bag = BagWriter(output)

@@ -36,10 +36,8 @@ saying what was wrong; the simulation is not touched and the node keeps serving.
 """
 import math
 import os
-import traceback
 
 import rclpy
-from rclpy.exceptions import ParameterUninitializedException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from builtin_interfaces.msg import Time
@@ -50,7 +48,8 @@ from std_msgs.msg import Float64MultiArray
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import StepRobot
-from lpa_transfer_nodes._ros_util import init_with_stop_event, spin_until_stopped
+from lpa_transfer_nodes._ros_util import (answering, array_parameter, init_with_stop_event,
+                                          spin_until_stopped)
 
 WORLD_FRAME = "world"
 
@@ -69,11 +68,8 @@ class RobotSim(Node):
         control_mode = self.declare_parameter("control_mode", "position").value
         physics_step = float(self.declare_parameter("physics_step", 1e-3).value)
         control_rate = float(self.declare_parameter("control_rate", 100.0).value)
-        self.declare_parameter("initial_positions", Parameter.Type.DOUBLE_ARRAY)
-        try:
-            initial = list(self.get_parameter("initial_positions").value or []) or None
-        except ParameterUninitializedException:
-            initial = None
+        initial = array_parameter(self, "initial_positions",
+                                  Parameter.Type.DOUBLE_ARRAY) or None
         seed = int(self.declare_parameter("seed", 0).value)
         self.lockstep = bool(self.declare_parameter("lockstep", True).value)
 
@@ -91,7 +87,7 @@ class RobotSim(Node):
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
-            self.create_service(StepRobot, "~/step", self.step_service)
+            self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
         else:
             if not (math.isfinite(control_rate) and control_rate > 0):
                 raise ValueError(f"control_rate must be a positive number of Hz, "
@@ -127,21 +123,11 @@ class RobotSim(Node):
         return joint_state, point.point
 
     def step_service(self, request, response):
-        try:
-            state = self.sim.step(list(request.command), request.n_steps)
-        except ValueError as exc:
-            response.success, response.message = False, str(exc)
-            response.sim_time = self.sim.time
-            return response
-        except Exception as exc:  # keep serving; the traceback goes to the log
-            self.get_logger().error(traceback.format_exc())
-            response.success, response.message = False, f"internal error: {exc!r}"
-            response.sim_time = self.sim.time
-            return response
+        response.sim_time = self.sim.time      # what a failed request reports
+        state = self.sim.step(list(request.command), request.n_steps)
         response.joint_state, response.end_effector = self.publish(state)
-        response.success, response.sim_time = True, state.time
-        response.message = f"advanced {max(1, request.n_steps)} step(s) to t={state.time:.6f} s"
-        return response
+        response.sim_time = state.time
+        return f"advanced {max(1, request.n_steps)} step(s) to t={state.time:.6f} s"
 
     def on_command(self, msg):
         command = list(msg.data)
