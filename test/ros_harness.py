@@ -99,3 +99,41 @@ def call_service(node, executor, client, request, timeout=20.0):
             raise TimeoutError(f"no answer from {client.srv_name} within {timeout} s")
         executor.spin_once(timeout_sec=0.05)
     return future.result()
+
+
+class ClientNode:
+    """An rclpy node in the test process, on its own context and domain, with its executor.
+
+    Tests build their publishers, subscriptions and clients on ``.node`` and spin with
+    :meth:`spin_for` / :meth:`spin_until` / :meth:`call`; :meth:`close` shuts it all down.
+    """
+
+    def __init__(self, domain_id, name):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self._rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_for(self, seconds):
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def spin_until(self, predicate, timeout=5.0, what="condition"):
+        def spun():
+            self.executor.spin_once(timeout_sec=0.05)
+            return predicate()
+        return wait_until(spun, timeout=timeout, period=0, what=what)
+
+    def call(self, client, request, timeout=20.0):
+        return call_service(self.node, self.executor, client, request, timeout)
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self._rclpy.try_shutdown(context=self.context)

@@ -1,5 +1,4 @@
 """The lpa_mapping node as a separate process over real DDS: fit, transfer, errors, restart."""
-import array
 import itertools
 import json
 import signal
@@ -9,13 +8,13 @@ import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.model_store import file_name
-from ros_harness import NodeProcess, call_service, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 from two_link import correspondences
 
 rclpy = pytest.importorskip("rclpy")
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 
 from lpa_transfer_interfaces.msg import Matrix  # noqa: E402
+from lpa_transfer_nodes.lpa_mapping import to_matrix  # noqa: E402
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel,  # noqa: E402
                                          ListModels, TransferPoints)
 
@@ -26,33 +25,20 @@ ID = "pincher->youbot"
 _CLIENTS = itertools.count()
 
 
-class MappingClient:
+class MappingClient(ClientNode):
     """A client node in this process, on its own context, with one client per service."""
 
     def __init__(self, domain_id):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node(f"mapping_test_client_{next(_CLIENTS)}",
-                                      context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+        super().__init__(domain_id, f"mapping_test_client_{next(_CLIENTS)}")
         self.clients = {name: self.node.create_client(srv, f"/lpa_mapping/{name}")
                         for name, srv in SERVICES.items()}
 
     def call(self, name, **fields):
-        request = SERVICES[name].Request(**fields)
-        return call_service(self.node, self.executor, self.clients[name], request)
-
-    def close(self):
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+        return super().call(self.clients[name], SERVICES[name].Request(**fields))
 
 
 def matrix(values):
-    values = np.ascontiguousarray(values, dtype=np.float64)
-    return Matrix(rows=values.shape[0], cols=values.shape[1],
-                  data=array.array("d", values.tobytes()))
+    return to_matrix(np.asarray(values, dtype=np.float64))
 
 
 def points(msg):

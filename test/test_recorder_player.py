@@ -5,11 +5,10 @@ import time
 import pytest
 
 from lpa_transfer import bag
-from ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
 
 rclpy = pytest.importorskip("rclpy")
 from rclpy.duration import Duration  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
@@ -20,33 +19,12 @@ JOINT_STATES, SAMPLES = 500, 40
 RELIABLE_1000 = QoSProfile(depth=1000)
 
 
-class RosTestNode:
-    """An rclpy node in the test process, on its own context and domain."""
-
-    def __init__(self, domain_id):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node("test_node", context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
-
-    def spin_for(self, seconds):
-        deadline = time.monotonic() + seconds
-        while time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.02)
-
-    def close(self):
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.try_shutdown(context=self.context)
-
-
 @pytest.fixture
 def ros_node():
     nodes = []
 
     def make(domain_id):
-        nodes.append(RosTestNode(domain_id))
+        nodes.append(ClientNode(domain_id, "test_node"))
         return nodes[-1]
 
     yield make

@@ -9,10 +9,9 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.kinematics import planar_forward_kinematics
 from lpa_transfer.robot_params import load_robot_params
-from ros_harness import NodeProcess, call_service, ros_params, unique_domain_id, wait_until
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 rclpy = pytest.importorskip("rclpy")
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
 from lpa_transfer_interfaces.srv import StepRobot  # noqa: E402
@@ -21,34 +20,21 @@ ROBOT = ROOT / "scenarios" / "robots" / "two_link_source.toml"
 LENGTHS = load_robot_params(ROBOT).link_lengths
 
 
-class SimClient:
+class SimClient(ClientNode):
     """A step client and a joint_states subscriber in this process, on their own context."""
 
     def __init__(self, domain_id):
-        self.context = rclpy.Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.node = rclpy.create_node("robot_sim_test_client", context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.executor.add_node(self.node)
+        super().__init__(domain_id, "robot_sim_test_client")
         self.client = self.node.create_client(StepRobot, "/robot_sim/step")
         self.joint_states = []
         self.node.create_subscription(JointState, "/joint_states", self.joint_states.append, 50)
 
     def step(self, command, n_steps):
-        return call_service(self.node, self.executor, self.client,
-                            StepRobot.Request(command=[float(c) for c in command],
-                                              n_steps=n_steps))
+        return self.call(self.client, StepRobot.Request(command=[float(c) for c in command],
+                                                        n_steps=n_steps))
 
     def spin_until(self, predicate, timeout=5.0):
-        def spun():
-            self.executor.spin_once(timeout_sec=0.05)
-            return predicate()
-        return wait_until(spun, timeout=timeout, period=0, what="joint_states")
-
-    def close(self):
-        self.executor.shutdown()
-        self.node.destroy_node()
-        rclpy.shutdown(context=self.context)
+        return super().spin_until(predicate, timeout, what="joint_states")
 
 
 @pytest.fixture(scope="module")
