@@ -5,6 +5,7 @@ stays on this host, and every node writes its own log file. ``stop()`` sends SIG
 (nodes must finalise their files on it) and falls back to SIGKILL, because rclpy 7.1 can
 ignore signals while blocked in a wait set (shared/notes/ros2-from-pypi.md).
 """
+import ctypes
 import itertools
 import os
 import signal
@@ -14,6 +15,13 @@ import time
 from pathlib import Path
 
 _DOMAINS = itertools.count()
+_PR_SET_PDEATHSIG = 1
+
+
+def _terminate_with_parent():
+    """Child side of Popen: get SIGTERM when the test process dies, even if pytest itself is
+    killed before its fixtures can stop the node (the node then finalises and exits)."""
+    ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
 def unique_domain_id():
@@ -49,7 +57,7 @@ class NodeProcess:
         self.process = subprocess.Popen(
             [sys.executable, "-m", f"lpa_transfer_nodes.{module}", *args],
             env=ros_env(domain_id, self.log_dir), stdout=self._log, stderr=subprocess.STDOUT,
-            start_new_session=True)
+            start_new_session=True, preexec_fn=_terminate_with_parent)
 
     def log(self):
         return self.log_path.read_text(errors="replace")
