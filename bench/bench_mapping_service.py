@@ -23,7 +23,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
-import array  # noqa: E402
 import re  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
@@ -44,19 +43,10 @@ import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 
-from lpa_transfer_interfaces.msg import Matrix  # noqa: E402
+from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, TransferPoints  # noqa: E402
 
 MODEL_ID = "youbot->pincher/inverse-dynamics"
-
-
-def matrix(values):
-    return Matrix(rows=values.shape[0], cols=values.shape[1],
-                  data=array.array("d", values.tobytes()))
-
-
-def read(msg):
-    return np.frombuffer(msg.data).reshape(msg.rows, msg.cols)
 
 
 def median_ms(function, calls):
@@ -87,32 +77,32 @@ def main():
         fit_client = client_node.create_client(FitModel, "/lpa_mapping/fit")
         transfer_client = client_node.create_client(TransferPoints, "/lpa_mapping/transfer")
         fit_request = FitModel.Request(
-            model_id=MODEL_ID, method="lpa", source=matrix(data["source"]),
-            target=matrix(data["target"]), **INVERSE_DYNAMICS)
+            model_id=MODEL_ID, method="lpa", source=to_matrix(data["source"]),
+            target=to_matrix(data["target"]), **INVERSE_DYNAMICS)
         start = time.perf_counter()
-        answer = call_service(client_node, executor, fit_client, fit_request, timeout=120)
+        answer = call_service(executor, fit_client, fit_request, timeout=120)
         fit_ms = 1000 * (time.perf_counter() - start)
         assert answer.success, answer.message + node.log()
 
         def round_trip():
-            request = TransferPoints.Request(model_id=MODEL_ID, source=matrix(held_out))
-            result = call_service(client_node, executor, transfer_client, request)
+            request = TransferPoints.Request(model_id=MODEL_ID, source=to_matrix(held_out))
+            result = call_service(executor, transfer_client, request)
             assert result.success, result.message
-            return read(result.target)
+            return from_matrix(result.target, "target")
 
         expected = round_trip()                          # warm-up, and the value to check
         end_to_end = median_ms(round_trip, calls)
         model = load_model(work / "m" / file_name(MODEL_ID))
         assert np.array_equal(model.transfer(held_out), expected)
-        request = TransferPoints.Request(model_id=MODEL_ID, source=matrix(held_out))
-        response = TransferPoints.Response(success=True, target=matrix(expected))
+        request = TransferPoints.Request(model_id=MODEL_ID, source=to_matrix(held_out))
+        response = TransferPoints.Response(success=True, target=to_matrix(expected))
         handled = [float(ms) for ms in re.findall(r"transfer handled in ([\d.]+) ms", node.log())]
         figures = {
             "end to end (build, call, read)": end_to_end,
             "node's transfer handler (its debug log)": (
                 float(np.median(handled[1:])), float(np.percentile(handled[1:], 90))),
-            "client build of the request Matrix": median_ms(lambda: matrix(held_out), calls),
-            "client read of the result": median_ms(lambda: read(response.target), calls),
+            "client build of the request Matrix": median_ms(lambda: to_matrix(held_out), calls),
+            "client read of the result": median_ms(lambda: from_matrix(response.target, "target"), calls),
             "library transfer in process": median_ms(lambda: model.transfer(held_out), calls),
             "CDR serialise + deserialise request": median_ms(lambda: deserialize_message(
                 serialize_message(request), TransferPoints.Request), calls),

@@ -8,7 +8,6 @@ plain file name, the mapping is reversible (the id survives a restart with no in
 keep in step) and no model file starts with ``.`` like the library's temporary files.
 """
 import array
-import os
 import urllib.parse
 from pathlib import Path
 
@@ -32,22 +31,6 @@ def matrix_from_rows(rows, cols, data, name):
     if isinstance(data, array.array) and data.typecode == "d":
         return np.frombuffer(data, dtype=np.float64).reshape(rows, cols)   # no copy
     return np.asarray(data, dtype=np.float64).reshape(rows, cols)
-
-
-def load_correspondences(path):
-    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
-    try:
-        archive = np.load(os.fspath(path), allow_pickle=False)
-    except (OSError, EOFError, ValueError) as exc:
-        raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
-    if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise ValueError(f"correspondence file {path} is not an .npz archive")
-    with archive:
-        missing = [key for key in ("source", "target") if key not in archive.files]
-        if missing:
-            raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
-                             f"(has {archive.files})")
-        return archive["source"], archive["target"]
 
 
 def training_rmse(model, source, target):

@@ -1,4 +1,5 @@
 """rclpy helpers shared by the nodes (no ``main``: not a console script)."""
+import array
 import importlib
 import signal
 import threading
@@ -13,7 +14,35 @@ from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSPro
                        ReliabilityPolicy)
 from rclpy.signals import SignalHandlerOptions
 
+from builtin_interfaces.msg import Time
+
 from lpa_transfer.bag import split_type_name
+from lpa_transfer.model_store import matrix_from_rows
+from lpa_transfer_interfaces.msg import Matrix
+
+
+#: Correspondence topics: every sample must arrive (reliable, deep queue); the batch is
+#: latched (transient local) so that a subscriber that joins late still gets the last one.
+SAMPLE_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+BATCH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def to_matrix(values):
+    """A Matrix message of a 2-D float64 array (fast buffer copy, see the ROS notes)."""
+    return Matrix(rows=values.shape[0], cols=values.shape[1],
+                  data=array.array("d", values.astype("float64", order="C").tobytes()))
+
+
+def from_matrix(msg, name):
+    """The (rows, cols) array of a Matrix message; ValueError if rows*cols != len(data)."""
+    return matrix_from_rows(msg.rows, msg.cols, msg.data, name)
+
+
+def sim_stamp(seconds):
+    """A builtin_interfaces/Time of a simulated time in seconds."""
+    nanoseconds = int(round(seconds * 1e9))
+    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
 def message_class(type_name):
@@ -108,3 +137,41 @@ def spin_until_stopped(node, stop):
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+class ServiceTimeout(RuntimeError):
+    """A service did not appear or answer in time."""
+
+
+def wait_for_services(clients, timeout, stop):
+    """Wait until every client's service is available; ServiceTimeout after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    for client in clients:
+        while not client.wait_for_service(timeout_sec=0.2):
+            if stop.is_set() or time.monotonic() > deadline:
+                raise ServiceTimeout(f"service {client.srv_name} is not available after "
+                                     f"{timeout:g} s (is its node running, in this ROS domain?)")
+
+
+def wait_for_subscribers(publisher, count, timeout, stop):
+    """Wait until ``publisher`` has ``count`` subscribers; ServiceTimeout after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while publisher.get_subscription_count() < count and not stop.is_set():
+        if time.monotonic() > deadline:
+            raise ServiceTimeout(f"{publisher.topic_name} has {publisher.get_subscription_count()}"
+                                 f" subscribers after {timeout:g} s, waited for {count}")
+        time.sleep(0.05)
+
+
+def call_service(executor, client, request, timeout):
+    """Call a service and wait for the answer with a ``spin_once`` loop (rclpy 7.1's
+    ``spin_until_future_complete`` slows down with every call); ServiceTimeout after
+    ``timeout`` s."""
+    future = client.call_async(request)
+    deadline = time.monotonic() + timeout
+    while not future.done():
+        if time.monotonic() > deadline:
+            client.remove_pending_request(future)
+            raise ServiceTimeout(f"service {client.srv_name} did not answer within {timeout:g} s")
+        executor.spin_once(timeout_sec=0.05)
+    return future.result()

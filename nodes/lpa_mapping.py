@@ -15,36 +15,35 @@ Services, under the node's name (``/lpa_mapping/...`` by default), types in
   ``cluster_dims`` means all source dimensions (the library's ``None``);
   PA uses only ``latent_dim``. When ``source`` and ``target`` are both empty, the
   correspondences are read from ``correspondence_file``: a NumPy ``.npz`` with the arrays
-  ``source`` (N, D_s) and ``target`` (N, D_t), row i of each in correspondence.
+  ``source`` (N, D_s) and ``target`` (N, D_t), row i of each in correspondence. When that is
+  empty too, ``received_pair`` (``"source_robot->target_robot"``) names correspondences the
+  node received on its topics (below).
 * ``~/transfer`` (TransferPoints): map source points through a stored model.
 * ``~/list`` (ListModels), ``~/describe`` (DescribeModel), ``~/delete`` (DeleteModel).
+
+Topics: the node keeps the correspondences published on ``correspondences``
+(CorrespondenceSample, e.g. by correspondence_collector or a player replaying a bag) and
+``correspondence_batch`` (CorrespondenceBatch), per robot pair. A sample with index 0 starts
+a new collection of its pair (a replay of the same bag thus gives the same set, not twice
+it); a batch replaces its pair's set whole.
 
 Every bad request (unknown id or method, rows*cols not matching the data, NaN/inf, too few
 points, wrong widths) is answered with ``success=false`` and the library's message; any other
 error is logged and answered the same way, so the node keeps serving.
 """
-import array
 import json
 
+import numpy as np
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import answering, init_with_stop_event, spin_until_stopped
+from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, from_matrix,
+                                          init_with_stop_event, spin_until_stopped, to_matrix)
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.model_store import (ModelStore, load_correspondences, matrix_from_rows,
-                                      training_rmse)
-from lpa_transfer_interfaces.msg import Matrix
+from lpa_transfer.correspondences import load_correspondences
+from lpa_transfer.model_store import ModelStore, training_rmse
+from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
-
-
-def to_matrix(values):
-    """A Matrix message of a 2-D float64 array (fast buffer copy, see the ROS notes)."""
-    return Matrix(rows=values.shape[0], cols=values.shape[1],
-                  data=array.array("d", values.astype("float64", order="C").tobytes()))
-
-
-def from_matrix(msg, name):
-    return matrix_from_rows(msg.rows, msg.cols, msg.data, name)
 
 
 LPA_DEFAULTS = LocalProcrustesAnalysis().get_params()
@@ -74,6 +73,11 @@ class MappingService(Node):
         super().__init__("lpa_mapping")
         model_dir = self.declare_parameter("model_dir", "~/.lpa_transfer/models").value
         self.store = ModelStore(model_dir)
+        self.received = {}
+        self.create_subscription(CorrespondenceSample, "correspondences", self.on_sample,
+                                 SAMPLE_QOS)
+        self.create_subscription(CorrespondenceBatch, "correspondence_batch", self.on_batch,
+                                 BATCH_QOS)
         for error in self.store.load_errors:
             self.get_logger().warning(f"skipped a model file: {error}")
         for name, srv_type, handler in (
@@ -84,12 +88,46 @@ class MappingService(Node):
         self.get_logger().info(f"serving {len(self.store.ids())} models from "
                                f"{self.store.directory}: {self.store.ids()}")
 
+    def on_sample(self, msg):
+        pair = f"{msg.source_robot}->{msg.target_robot}"
+        if msg.index == 0 or pair not in self.received:
+            self.received[pair] = {}
+        self.received[pair][msg.index] = (np.array(msg.source), np.array(msg.target))
+
+    def on_batch(self, msg):
+        try:
+            rows = zip(from_matrix(msg.source, "source"), from_matrix(msg.target, "target"))
+        except ValueError as exc:
+            self.get_logger().warning(f"ignoring a correspondence batch: {exc}")
+            return
+        self.received[f"{msg.source_robot}->{msg.target_robot}"] = dict(enumerate(rows))
+
+    def received_correspondences(self, pair):
+        """(source, target) arrays of a received pair's correspondences, in index order."""
+        if pair not in self.received:
+            raise ValueError(f"no correspondences received for the robot pair {pair!r}; "
+                             f"received: {sorted(self.received)}")
+        samples = [self.received[pair][index] for index in sorted(self.received[pair])]
+        for side, name in enumerate(("source", "target")):
+            widths = {len(sample[side]) for sample in samples}
+            if len(widths) > 1:
+                raise ValueError(f"the {name} samples received for {pair!r} have different "
+                                 f"lengths {sorted(widths)}")
+        return tuple(np.array([sample[side] for sample in samples]) for side in (0, 1))
+
+    def correspondences(self, request):
+        """The request's correspondences: its matrices, else its file, else a received pair."""
+        if request.source.data or request.target.data:
+            return from_matrix(request.source, "source"), from_matrix(request.target, "target")
+        if request.correspondence_file:
+            return load_correspondences(request.correspondence_file)
+        if request.received_pair:
+            return self.received_correspondences(request.received_pair)
+        raise ValueError("no correspondences: send source and target, a correspondence_file "
+                         "or a received_pair")
+
     def fit(self, request, response):
-        if request.source.data or request.target.data or not request.correspondence_file:
-            source = from_matrix(request.source, "source")
-            target = from_matrix(request.target, "target")
-        else:
-            source, target = load_correspondences(request.correspondence_file)
+        source, target = self.correspondences(request)
         model = self.store.fit(request.model_id, request.method, source, target,
                                **fit_hyperparameters(request))
         response.n_clusters = int(getattr(model, "n_clusters_", 1))

@@ -12,6 +12,8 @@ Parameters:
 * ``control_rate`` (Hz, default 100): free-running mode only, see below.
 * ``initial_positions`` (double array, default: zero clipped into the joint limits).
 * ``seed`` (int, default 0): passed to the simulator (which is deterministic).
+* ``position_gain`` (default 0.05): the position motors' gain, see
+  :class:`lpa_transfer.simulator.RobotSimulator` (pybullet's own default 0.1 can chatter).
 * ``lockstep`` (bool, default true).
 
 Lock-step mode (default): the service ``~/step`` (lpa_transfer_interfaces/srv/StepRobot)
@@ -40,7 +42,6 @@ import os
 import rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PointStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -49,15 +50,9 @@ from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import StepRobot
 from lpa_transfer_nodes._ros_util import (answering, array_parameter, init_with_stop_event,
-                                          spin_until_stopped)
+                                          sim_stamp, spin_until_stopped)
 
 WORLD_FRAME = "world"
-
-
-def sim_stamp(seconds):
-    """A builtin_interfaces/Time of a simulated time in seconds."""
-    nanoseconds = int(round(seconds * 1e9))
-    return Time(sec=nanoseconds // 1_000_000_000, nanosec=nanoseconds % 1_000_000_000)
 
 
 class RobotSim(Node):
@@ -71,6 +66,7 @@ class RobotSim(Node):
         initial = array_parameter(self, "initial_positions",
                                   Parameter.Type.DOUBLE_ARRAY) or None
         seed = int(self.declare_parameter("seed", 0).value)
+        position_gain = float(self.declare_parameter("position_gain", 0.05).value)
         self.lockstep = bool(self.declare_parameter("lockstep", True).value)
 
         if bool(robot) == bool(urdf):
@@ -82,7 +78,7 @@ class RobotSim(Node):
             description = os.path.expanduser(urdf)
         self.sim = RobotSimulator(description, control_mode=control_mode,
                                   physics_step=physics_step, initial_positions=initial,
-                                  seed=seed)
+                                  seed=seed, position_gain=position_gain)
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"

@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -49,10 +50,10 @@ def ros_params(**params):
 class NodeProcess:
     """One node (``python -m lpa_transfer_nodes.<module>``) in its own process group."""
 
-    def __init__(self, module, domain_id, log_dir, args=()):
+    def __init__(self, module, domain_id, log_dir, args=(), name=None):
         self.module, self.log_dir = module, Path(log_dir)
         self.log_dir.mkdir(parents=True, exist_ok=True)
-        self.log_path = self.log_dir / f"{module}.log"
+        self.log_path = self.log_dir / f"{name or module}.log"
         self._log = open(self.log_path, "ab")
         self.process = subprocess.Popen(
             [sys.executable, "-m", f"lpa_transfer_nodes.{module}", *args],
@@ -95,18 +96,13 @@ def wait_until(predicate, timeout=20.0, period=0.05, what="condition"):
     raise TimeoutError(f"timed out after {timeout} s waiting for {what}")
 
 
-def call_service(node, executor, client, request, timeout=20.0):
-    """Call a service and spin until the answer arrives (not spin_until_future_complete,
-    which slows down with every call in rclpy 7.1)."""
-    if not client.wait_for_service(timeout_sec=timeout):
-        raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
-    future = client.call_async(request)
-    deadline = time.monotonic() + timeout
-    while not future.done():
-        if time.monotonic() > deadline:
-            raise TimeoutError(f"no answer from {client.srv_name} within {timeout} s")
-        executor.spin_once(timeout_sec=0.05)
-    return future.result()
+def call_service(executor, client, request, timeout=20.0):
+    """Wait for the service, call it and spin until the answer arrives (the nodes' own
+    helpers: not spin_until_future_complete, which slows down with every call in rclpy 7.1)."""
+    from lpa_transfer_nodes._ros_util import call_service as call, wait_for_services
+
+    wait_for_services([client], timeout, threading.Event())
+    return call(executor, client, request, timeout)
 
 
 class ClientNode:
@@ -139,7 +135,7 @@ class ClientNode:
         return wait_until(spun, timeout=timeout, period=0, what=what)
 
     def call(self, client, request, timeout=20.0):
-        return call_service(self.node, self.executor, client, request, timeout)
+        return call_service(self.executor, client, request, timeout)
 
     def close(self):
         self.executor.shutdown()

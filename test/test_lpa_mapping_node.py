@@ -14,7 +14,7 @@ from two_link import correspondences
 rclpy = pytest.importorskip("rclpy")
 
 from lpa_transfer_interfaces.msg import Matrix  # noqa: E402
-from lpa_transfer_nodes.lpa_mapping import to_matrix  # noqa: E402
+from lpa_transfer_nodes._ros_util import to_matrix  # noqa: E402
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel,  # noqa: E402
                                          ListModels, TransferPoints)
 

@@ -5,8 +5,7 @@ import numpy as np
 import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.model_store import (ModelStore, file_name, load_correspondences,
-                                      matrix_from_rows, training_rmse)
+from lpa_transfer.model_store import ModelStore, file_name, matrix_from_rows, training_rmse
 from two_link import correspondences
 
 ID = "pincher->youbot/left arm"
@@ -121,14 +120,3 @@ def test_matrix_from_rows():
     assert matrix_from_rows(3, 2, [1, 2, 3, 4, 5, 6], "source").shape == (3, 2)
     with pytest.raises(ValueError, match=r"source: rows\*cols = 2\*2 = 4 does not match the 6"):
         matrix_from_rows(2, 2, values, "source")
-
-
-def test_load_correspondences(tmp_path):
-    np.savez(tmp_path / "pairs.npz", source=np.ones((3, 2)), target=np.zeros((3, 4)))
-    source, target = load_correspondences(tmp_path / "pairs.npz")
-    assert source.shape == (3, 2) and target.shape == (3, 4)
-    np.savez(tmp_path / "half.npz", source=np.ones((3, 2)))
-    with pytest.raises(ValueError, match=r"lacks the arrays \['target'\]"):
-        load_correspondences(tmp_path / "half.npz")
-    with pytest.raises(ValueError, match="cannot read correspondence file"):
-        load_correspondences(tmp_path / "missing.npz")

@@ -1,0 +1,143 @@
+"""Motor babbling programs: seeded random straight lines in joint or task space (no rclpy).
+
+The thesis collects correspondences by driving robots through the same random exploration:
+joint-space positions (§3.6), straight task-space segments tracked by both robots (§5.4.1),
+random joint samples (§4.4.2), joint commands executed on both bodies (§6.4.2). A
+:class:`BabblingProgram` is that exploration as hyperparameters; what it commands depends on
+the robot's :class:`Kinematics`:
+
+* ``"joint_lines"``: straight lines in joint space between random waypoints drawn uniformly
+  in the unit box and scaled to the robot's joint limits. Waypoint coordinate j depends only
+  on (seed, j), so robots babbling with one seed move their common joints alike, each in
+  proportion to its own range — straight lines stay straight under this scaling.
+* ``"task_lines"``: straight lines in task space between random waypoints drawn uniformly in
+  the box ``task_low``..``task_high``; each robot follows them with its own inverse
+  kinematics (:mod:`lpa_transfer.inverse_kinematics`), warm-started along the path.
+
+Every line starts where the last ended (the first at the robot's home) and holds
+``samples_per_segment`` commands, the last one at the waypoint.
+"""
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import inverse_kinematics
+from ._validation import check_int
+from .kinematics import planar_forward_kinematics
+
+PROGRAMS = ("joint_lines", "task_lines")
+_TASK_STREAM = 2 ** 20   # seed-sequence key of the task-space waypoints (joints use 0..n-1)
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """What a babbling program needs to know of a robot.
+
+    ``joint_limits`` (n, 2) rad, ``home`` (n,) the pose babbling starts from, ``forward``
+    maps joint vectors (N, n) to task points (N, m).
+    """
+
+    joint_limits: np.ndarray
+    home: np.ndarray
+    forward: Callable[[np.ndarray], np.ndarray]
+
+    @property
+    def n_joints(self):
+        return len(self.joint_limits)
+
+
+def home_pose(joint_limits, positions=None):
+    """The given pose (checked to lie within the limits) or zero clipped into the limits."""
+    limits = np.asarray(joint_limits, dtype=np.float64)
+    if positions is None or len(positions) == 0:
+        return np.clip(np.zeros(len(limits)), limits[:, 0], limits[:, 1])
+    home = np.asarray(positions, dtype=np.float64)
+    if home.shape != (len(limits),) or not np.isfinite(home).all():
+        raise ValueError(f"home pose needs {len(limits)} finite joint values, got {positions}")
+    if ((home < limits[:, 0]) | (home > limits[:, 1])).any():
+        raise ValueError(f"home pose {home.tolist()} lies outside the joint limits "
+                         f"{limits.tolist()}")
+    return home
+
+
+def planar_kinematics(robot, home=None):
+    """:class:`Kinematics` of a planar chain (``RobotParams``): task space (x, y)."""
+    lengths = np.array(robot.link_lengths, dtype=np.float64)
+    return Kinematics(np.array(robot.joint_limits, dtype=np.float64),
+                      home_pose(robot.joint_limits, home),
+                      lambda q: planar_forward_kinematics(q, lengths))
+
+
+def polyline(start, waypoints, samples_per_segment):
+    """Points on the straight lines start → waypoints[0] → waypoints[1] → …:
+    ``samples_per_segment`` per line, evenly spaced, each line's end included."""
+    waypoints = np.asarray(waypoints, dtype=np.float64)
+    starts = np.vstack((start, waypoints[:-1]))
+    fractions = np.arange(1, samples_per_segment + 1) / samples_per_segment
+    points = starts[:, None] + fractions[None, :, None] * (waypoints - starts)[:, None]
+    return points.reshape(-1, waypoints.shape[1])
+
+
+@dataclass(frozen=True)
+class BabblingProgram:
+    """Seeded straight-line babbling (module docstring); the fields are its hyperparameters.
+
+    ``task_low``/``task_high`` bound the task-space waypoints of ``"task_lines"``.
+    """
+
+    program: str = "joint_lines"
+    n_segments: int = 20
+    samples_per_segment: int = 10
+    seed: int = 0
+    task_low: tuple = ()
+    task_high: tuple = ()
+
+    def __post_init__(self):
+        if self.program not in PROGRAMS:
+            raise ValueError(f"program must be one of {PROGRAMS}, got {self.program!r}")
+        check_int(self.n_segments, "n_segments", 1)
+        check_int(self.samples_per_segment, "samples_per_segment", 1)
+        if self.program == "task_lines":
+            low, high = (np.asarray(b, dtype=np.float64) for b in (self.task_low, self.task_high))
+            if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
+                    or not np.isfinite(low).all() or not np.isfinite(high).all() \
+                    or (low > high).any():
+                raise ValueError(f"task_lines needs finite task_low <= task_high of one length, "
+                                 f"got {self.task_low} and {self.task_high}")
+
+    @property
+    def n_samples(self):
+        return self.n_segments * self.samples_per_segment
+
+    def unit_waypoints(self, n_joints):
+        """(n_segments, n_joints) waypoints in the unit box; column j depends on (seed, j)."""
+        return np.column_stack([np.random.default_rng([self.seed, j]).uniform(
+            size=self.n_segments) for j in range(n_joints)])
+
+    def task_waypoints(self):
+        rng = np.random.default_rng([self.seed, _TASK_STREAM])
+        return rng.uniform(self.task_low, self.task_high, size=(self.n_segments,
+                                                                len(self.task_low)))
+
+    def joint_commands(self, joint_limits, start):
+        """The joint-space lines scaled to ``joint_limits`` (n, 2), starting at ``start``."""
+        limits = np.asarray(joint_limits, dtype=np.float64)
+        waypoints = limits[:, 0] + self.unit_waypoints(len(limits)) * (limits[:, 1] - limits[:, 0])
+        return polyline(start, waypoints, self.samples_per_segment)
+
+    def task_points(self, start_point):
+        """The task-space lines from ``start_point``: (n_samples, m)."""
+        if len(start_point) != len(self.task_low):
+            raise ValueError(f"task_low/task_high have {len(self.task_low)} coordinates but the "
+                             f"robot's task space has {len(start_point)}")
+        return polyline(start_point, self.task_waypoints(), self.samples_per_segment)
+
+    def commands(self, kinematics):
+        """The robot's joint commands (n_samples, n) for this program."""
+        if self.program == "joint_lines":
+            return self.joint_commands(kinematics.joint_limits, kinematics.home)
+        start = kinematics.forward(kinematics.home[None])[0]
+        commands, _ = inverse_kinematics.solve_path(
+            kinematics.forward, self.task_points(start), kinematics.home, kinematics.joint_limits)
+        return commands

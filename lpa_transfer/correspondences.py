@@ -1,0 +1,231 @@
+"""Correspondences between two robots collected by babbling, and their files (no rclpy).
+
+A correspondence pairs a source-robot point with a target-robot point (thesis ch. 3, §3.1).
+The collector drives both robots (anything with ``step(command, n_steps) -> state``, the
+state having ``time``, ``positions``, ``velocities``, ``efforts``, ``end_effector`` like
+:class:`lpa_transfer.simulator.SimState`) through one :class:`~lpa_transfer.babbling.BabblingProgram`
+and pairs their samples by one of three rules — each thesis domain uses a different one:
+
+* ``"same_command"``: the target executes the source's joint commands on their common
+  joints (the first min(n_s, n_t)); other joints stay at home. §3.6 pairs the two 2-link
+  robots at equal joint angles; §6.4.2's guided exploration runs the same commands on both.
+  Joint-line waypoints are drawn inside the intersection of the two robots' joint limits.
+* ``"same_time_index"``: each robot runs the program in its own space (joint lines scaled to
+  its own limits, or the same task lines through its own inverse kinematics) and sample i of
+  the source pairs with sample i of the target (§5.4.1).
+* ``"same_task_point"``: the source runs the program; after each of its samples the target
+  is sent, by its inverse kinematics, to the point the source's end effector reached (plus
+  ``task_offset``, the target's frame relative to the source's); §4.4.2.
+
+Each sample is the robot's state after ``steps_per_sample`` physics steps, as the
+concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (backward
+difference of velocities), ``effort`` (one value per joint) and ``ee_x``/``ee_y``/``ee_z``
+(end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
+z = (q, x) of a planar arm.
+"""
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import inverse_kinematics
+from ._validation import check_int
+from .babbling import home_pose
+
+PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
+JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
+TASK_FEATURES = ("ee_x", "ee_y", "ee_z")
+FEATURES = JOINT_FEATURES + TASK_FEATURES
+DEFAULT_FEATURES = ("position", "ee_x", "ee_y")
+
+
+def check_features(features):
+    features = tuple(features)
+    unknown = [f for f in features if f not in FEATURES]
+    if not features or unknown or len(set(features)) != len(features):
+        raise ValueError(f"features must be distinct names from {FEATURES}, got {list(features)}")
+    return features
+
+
+def feature_vector(state, previous, features):
+    """The sample of ``state`` (see module docstring); ``previous`` gives the acceleration."""
+    parts = []
+    for name in features:
+        if name == "acceleration":
+            dt = state.time - previous.time
+            parts.append((np.asarray(state.velocities) - previous.velocities) / dt)
+        elif name in TASK_FEATURES:
+            parts.append([state.end_effector[TASK_FEATURES.index(name)]])
+        else:
+            parts.append(getattr(state, {"position": "positions", "velocity": "velocities",
+                                         "effort": "efforts"}[name]))
+    return np.concatenate(parts).astype(np.float64)
+
+
+def feature_names(features, joint_names):
+    """Column names of the samples, e.g. ``position/joint1``, ``ee_x``."""
+    return [f"{name}/{joint}" if name in JOINT_FEATURES else name
+            for name in features for joint in (joint_names if name in JOINT_FEATURES else [""])]
+
+
+@dataclass
+class CorrespondenceSet:
+    """Paired samples: row i of ``source`` corresponds to row i of ``target``."""
+
+    source: np.ndarray
+    target: np.ndarray
+    source_robot: str = ""
+    target_robot: str = ""
+    pairing_rule: str = ""
+    features: tuple = DEFAULT_FEATURES
+    sim_time: float = 0.0            # simulated seconds the source robot babbled
+    complete: bool = True            # False when collection was stopped early
+    metadata: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.source)
+
+    def save(self, path):
+        """Write an ``.npz`` (``source``, ``target`` and the metadata as strings/scalars)
+        atomically: a temporary file renamed into place, so a reader never sees half a file."""
+        path = os.fspath(path)
+        temporary = f"{path}.tmp.npz"
+        np.savez(temporary, source=self.source, target=self.target,
+                 source_robot=self.source_robot, target_robot=self.target_robot,
+                 pairing_rule=self.pairing_rule, features=np.array(self.features, dtype=str),
+                 sim_time=self.sim_time, complete=self.complete,
+                 **{f"meta_{k}": np.asarray(v) for k, v in self.metadata.items()})
+        os.replace(temporary, path)
+
+
+def load_correspondences(path):
+    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
+    try:
+        archive = np.load(os.fspath(path), allow_pickle=False)
+    except (OSError, EOFError, ValueError) as exc:
+        raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise ValueError(f"correspondence file {path} is not an .npz archive")
+    with archive:
+        missing = [key for key in ("source", "target") if key not in archive.files]
+        if missing:
+            raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
+                             f"(has {archive.files})")
+        return archive["source"], archive["target"]
+
+
+def shared_limits(source, target):
+    """Intersection of the two robots' limits on their common (first) joints."""
+    n_common = min(source.n_joints, target.n_joints)
+    lower = np.maximum(source.joint_limits[:n_common, 0], target.joint_limits[:n_common, 0])
+    upper = np.minimum(source.joint_limits[:n_common, 1], target.joint_limits[:n_common, 1])
+    if (lower > upper).any():
+        raise ValueError(f"same_command needs overlapping joint ranges; the common joints' "
+                         f"ranges do not overlap (lower {lower}, upper {upper})")
+    return np.column_stack((lower, upper))
+
+
+def with_home(commands, home):
+    """Commands for all joints of a robot: the given columns, then its home values."""
+    full = np.tile(home, (len(commands), 1))
+    full[:, :commands.shape[1]] = commands
+    return full
+
+
+def check_pairing_rule(pairing_rule):
+    if pairing_rule not in PAIRING_RULES:
+        raise ValueError(f"pairing_rule must be one of {PAIRING_RULES}, got {pairing_rule!r}")
+    return pairing_rule
+
+
+def planned_commands(program, pairing_rule, source, target):
+    """(source commands, target commands or None when the target follows online)."""
+    check_pairing_rule(pairing_rule)
+    if pairing_rule == "same_time_index":
+        return program.commands(source), program.commands(target)
+    if pairing_rule == "same_task_point" or program.program == "task_lines":
+        source_commands = program.commands(source)
+    else:
+        limits = shared_limits(source, target)
+        start = np.clip(source.home[:len(limits)], limits[:, 0], limits[:, 1])
+        source_commands = with_home(program.joint_commands(limits, start), source.home)
+    if pairing_rule == "same_task_point":
+        return source_commands, None
+    return source_commands, with_home(source_commands[:, :min(source.n_joints,
+                                                              target.n_joints)], target.home)
+
+
+def task_point_command(target, end_effector, task_offset, previous_command):
+    """The target's joint command for the source's end-effector point (same_task_point):
+    the first len(task_offset) end-effector coordinates, shifted by ``task_offset``."""
+    point = np.asarray(end_effector[:len(task_offset)], dtype=np.float64) + task_offset
+    command, _ = inverse_kinematics.solve(target.forward, point, previous_command,
+                                          target.joint_limits)
+    return command
+
+
+def run_commands(commands, step, steps_per_sample, features, home, should_stop=None):
+    """One robot's babbling without a partner (its own experience): ``(samples, sim_time)``.
+
+    The robot first settles at ``home`` for one sample period (not recorded)."""
+    features = check_features(features)
+    check_int(steps_per_sample, "steps_per_sample", 1)
+    previous = start = step(home, steps_per_sample)
+    samples = []
+    for command in commands:
+        if should_stop is not None and should_stop():
+            break
+        state = step(command, steps_per_sample)
+        samples.append(feature_vector(state, previous, features))
+        previous = state
+    return _rows(samples), previous.time - start.time
+
+
+def collect_correspondences(program, pairing_rule, source, target, step_source, step_target,
+                            steps_per_sample, features=DEFAULT_FEATURES, task_offset=None,
+                            on_pair=None, should_stop=None):
+    """Drive both robots through ``program`` and pair their samples (module docstring).
+
+    ``source``/``target`` are :class:`~lpa_transfer.babbling.Kinematics`; ``step_*`` advance
+    the robots; ``on_pair(index, source_sample, target_sample)`` sees each pair as it is made;
+    ``should_stop()`` ends collection early (the result then has ``complete=False``). Returns
+    a :class:`CorrespondenceSet` (robot names left empty for the caller).
+    """
+    features = check_features(features)
+    check_int(steps_per_sample, "steps_per_sample", 1)
+    source_commands, target_commands = planned_commands(program, pairing_rule, source, target)
+    offset = np.zeros(0) if task_offset is None else np.asarray(task_offset, dtype=np.float64)
+    if pairing_rule == "same_task_point":
+        n_task = target.forward(target.home[None]).shape[1]
+        offset = np.zeros(n_task) if offset.size == 0 else offset
+        if offset.shape != (n_task,) or not np.isfinite(offset).all():
+            raise ValueError(f"task_offset needs {n_task} finite values, got {task_offset}")
+    source_previous = source_start = step_source(source.home, steps_per_sample)
+    target_previous = step_target(target.home, steps_per_sample)
+    target_command = home_pose(target.joint_limits, target.home)
+    pairs_source, pairs_target, complete = [], [], True
+    for index, source_command in enumerate(source_commands):
+        if should_stop is not None and should_stop():
+            complete = False
+            break
+        source_state = step_source(source_command, steps_per_sample)
+        if target_commands is None:
+            target_command = task_point_command(target, source_state.end_effector, offset,
+                                                target_command)
+        else:
+            target_command = target_commands[index]
+        target_state = step_target(target_command, steps_per_sample)
+        pairs_source.append(feature_vector(source_state, source_previous, features))
+        pairs_target.append(feature_vector(target_state, target_previous, features))
+        if on_pair is not None:
+            on_pair(index, pairs_source[-1], pairs_target[-1])
+        source_previous, target_previous = source_state, target_state
+    return CorrespondenceSet(_rows(pairs_source), _rows(pairs_target), pairing_rule=pairing_rule,
+                             features=features, sim_time=source_previous.time - source_start.time,
+                             complete=complete)
+
+
+
+def _rows(samples):
+    """Samples as an (N, D) array; (0, 0) when there are none."""
+    return np.array(samples) if samples else np.empty((0, 0))

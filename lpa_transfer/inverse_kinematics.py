@@ -1,0 +1,61 @@
+"""Numerical inverse kinematics by damped least squares (no rclpy).
+
+Task-space babbling (thesis §5.4.1: both robots track the same straight task-space lines) and
+task-point pairing (§4.4.2: the demonstrator reaches the point the robot reached) need each
+robot's joint angles for a task-space point. The robot is given only by its forward
+kinematics ``forward(Q) -> X`` ((N, n) joint vectors to (N, m) task points), so any chain
+works; the Jacobian is taken by forward differences.
+
+One iteration (Wampler 1986; Buss 2004, "Introduction to inverse kinematics with Jacobian
+transpose, pseudoinverse and damped least squares methods", eq. 10):
+``Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e``, then q is clipped into the joint limits. Unreachable points
+end at the nearest reachable point the iteration finds (the damping keeps the step bounded
+near singularities); the returned residual says how far that is.
+"""
+import numpy as np
+
+FD_STEP = 1e-7
+
+
+def jacobian(forward, q):
+    """(m, n) forward-difference Jacobian of ``forward`` at the joint vector ``q``."""
+    n = len(q)
+    points = forward(np.vstack((q, q + FD_STEP * np.eye(n))))
+    return (points[1:] - points[0]).T / FD_STEP
+
+
+def solve(forward, x_target, q_start, joint_limits, damping=0.01, tolerance=1e-7,
+          max_iterations=200):
+    """Joint angles reaching ``x_target`` from ``q_start``: ``(q, residual)``.
+
+    Damped least squares (module docstring) with joint limits enforced by clipping; stops when
+    the task-space error is below ``tolerance`` (m) or stops shrinking. ``residual`` is the
+    remaining distance ||forward(q) − x_target||.
+    """
+    limits = np.asarray(joint_limits, dtype=np.float64)
+    x_target = np.asarray(x_target, dtype=np.float64)
+    q = np.clip(np.asarray(q_start, dtype=np.float64), limits[:, 0], limits[:, 1])
+    error = x_target - forward(q[None])[0]
+    for _ in range(max_iterations):
+        if np.linalg.norm(error) < tolerance:
+            break
+        J = jacobian(forward, q)
+        step = J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(len(error)), error)
+        q_next = np.clip(q + step, limits[:, 0], limits[:, 1])
+        error_next = x_target - forward(q_next[None])[0]
+        if np.linalg.norm(error_next) >= np.linalg.norm(error) * (1 - 1e-9):
+            break
+        q, error = q_next, error_next
+    return q, float(np.linalg.norm(error))
+
+
+def solve_path(forward, points, q_start, joint_limits, **options):
+    """Joint angles for each task point of a path, each solve warm-started at the previous
+    solution (so the arm keeps one elbow configuration along a line): ``(Q, residuals)``."""
+    q = np.asarray(q_start, dtype=np.float64)
+    solutions, residuals = [], []
+    for point in np.asarray(points, dtype=np.float64):
+        q, residual = solve(forward, point, q, joint_limits, **options)
+        solutions.append(q)
+        residuals.append(residual)
+    return np.array(solutions).reshape(len(residuals), len(q)), np.array(residuals)

@@ -1,0 +1,214 @@
+"""correspondence_collector: babble two simulated robots, pair their samples, fit a mapping.
+
+Run (with two robot_sim nodes in lock-step mode under the namespaces ``/source`` and
+``/target``, and lpa_mapping): ``correspondence_collector --ros-args -p
+source_robot:=scenarios/robots/two_link_source.toml -p target_robot:=... -p output:=pairs.npz``.
+
+What it does (:func:`lpa_transfer.correspondences.collect_correspondences`): drives both
+robots through one seeded babbling program over their ``StepRobot`` services, pairs their
+samples by ``pairing_rule``, publishes every pair as it is made, saves the set, asks the
+mapping service to fit a model on it, and exits (0 on success). SIGINT/SIGTERM stop the
+babbling early: the pairs made so far are published and saved (``complete = False`` in the
+file) and no model is fitted. Because the robots are stepped in lock-step, a run takes as
+long as the computation, and the same parameters give the same pairs, bit for bit.
+
+Parameters:
+
+* ``source_robot``, ``target_robot``: robot parameter files (joint limits and kinematics, for
+  the babbling program and inverse kinematics); their ``name`` labels the pairs.
+* ``source_step``, ``target_step``: the robots' StepRobot services (default
+  ``/source/robot_sim/step`` and ``/target/robot_sim/step``).
+* ``source_home``, ``target_home`` (double arrays): the poses babbling starts from; default
+  zero clipped into the limits, robot_sim's default initial pose.
+* ``pairing_rule``: ``same_command`` (default), ``same_time_index`` or ``same_task_point``.
+* ``program``: ``joint_lines`` (default) or ``task_lines``; ``n_segments`` (20),
+  ``samples_per_segment`` (5), ``steps_per_sample`` (physics steps between samples, 400),
+  ``seed`` (0), ``task_low``/``task_high`` (task_lines' waypoint box, m), ``task_offset``
+  (same_task_point: the target's task frame relative to the source's, m).
+* ``features`` (string array, default ``[position, ee_x, ee_y]``): the columns of a sample,
+  see :mod:`lpa_transfer.correspondences`.
+* ``output``: the ``.npz`` to save the set to (``source``, ``target`` arrays and metadata;
+  the file lpa_mapping's ``correspondence_file`` reads); empty = do not save.
+* ``model_id``: fit a model under this id when done (empty = do not fit); ``method``
+  (``lpa``), ``latent_dim``, ``n_min``, ``c_min``, ``k_max``, ``cluster_dims``, ``n_init``
+  as in FitModel.srv (0/empty = defaults), ``random_state`` (the seed);
+  ``mapping_service`` (``/lpa_mapping/fit``).
+* ``wait_for_subscribers`` (0): babble only once ``correspondences`` has this many
+  subscribers (e.g. 2 for a recorder and lpa_mapping), so none misses the first pairs.
+* ``wait_timeout`` (s, 30): how long to wait for each service (and the subscribers);
+  ``call_timeout`` (s, 120): how long a single call may take (a fit on many points).
+
+Topics: ``correspondences`` (CorrespondenceSample, one per pair, header stamp = the source's
+simulated time) and, when done, ``correspondence_batch`` (CorrespondenceBatch, the whole
+set; transient local, so a late subscriber still gets it).
+"""
+import os
+
+import numpy as np
+import rclpy
+from rclpy.duration import Duration
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from lpa_transfer.babbling import BabblingProgram, planar_kinematics
+from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
+                                          collect_correspondences)
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.simulator import SimState
+from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
+from lpa_transfer_interfaces.srv import FitModel, StepRobot
+from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
+                                          init_with_stop_event, sim_stamp, to_matrix,
+                                          wait_for_services, wait_for_subscribers)
+
+FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
+              "n_init": 0}
+
+
+def required_path(value, name):
+    if not value:
+        raise ValueError(f"set the parameter {name!r} (a robot parameter file)")
+    return os.path.expanduser(value)
+
+
+class CorrespondenceCollector(Node):
+    def __init__(self, stop):
+        super().__init__("correspondence_collector")
+        self.stop = stop
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        doubles = lambda name: array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)  # noqa: E731,E501
+        self.robots = {side: load_robot_params(required_path(declare(f"{side}_robot", ""),
+                                                             f"{side}_robot"))
+                       for side in ("source", "target")}
+        self.kinematics = {side: planar_kinematics(robot, doubles(f"{side}_home") or None)
+                           for side, robot in self.robots.items()}
+        self.pairing_rule = check_pairing_rule(declare("pairing_rule", "same_command"))
+        self.program = BabblingProgram(
+            declare("program", "joint_lines"), declare("n_segments", 20),
+            declare("samples_per_segment", 5), declare("seed", 0),
+            tuple(doubles("task_low")), tuple(doubles("task_high")))
+        self.steps_per_sample = declare("steps_per_sample", 400)
+        self.task_offset = doubles("task_offset") or None
+        self.features = check_features(array_parameter(self, "features") or DEFAULT_FEATURES)
+        self.output = os.path.expanduser(declare("output", ""))
+        self.model_id = declare("model_id", "")
+        self.fit_fields = {name: declare(name, default) for name, default in FIT_FIELDS.items()}
+        self.fit_fields["cluster_dims"] = array_parameter(self, "cluster_dims",
+                                                          Parameter.Type.INTEGER_ARRAY)
+        self.fit_fields["random_state"] = declare("random_state", 0)
+        self.wait_for_subscribers = declare("wait_for_subscribers", 0)
+        self.wait_timeout = float(declare("wait_timeout", 30.0))
+        self.call_timeout = float(declare("call_timeout", 120.0))
+        self.step_clients = {side: self.create_client(
+            StepRobot, declare(f"{side}_step", f"/{side}/robot_sim/step"))
+            for side in ("source", "target")}
+        self.fit_client = self.create_client(FitModel, declare("mapping_service",
+                                                               "/lpa_mapping/fit"))
+        self.sample_pub = self.create_publisher(CorrespondenceSample, "correspondences",
+                                                SAMPLE_QOS)
+        self.batch_pub = self.create_publisher(CorrespondenceBatch, "correspondence_batch",
+                                               BATCH_QOS)
+        self.spinner = SingleThreadedExecutor()
+        self.spinner.add_node(self)
+        self.sim_time = 0.0
+
+    # -- talking to the robots and the mapping service ---------------------------------------
+    def call(self, client, request):
+        return call_service(self.spinner, client, request, self.call_timeout)
+
+    def stepper(self, side):
+        client = self.step_clients[side]
+
+        def step(command, n_steps):
+            response = self.call(client, StepRobot.Request(
+                command=[float(c) for c in command], n_steps=int(n_steps)))
+            if not response.success:
+                raise RuntimeError(f"the {side} robot refused a step: {response.message}")
+            state = response.joint_state
+            if side == "source":
+                self.sim_time = response.sim_time
+            point = response.end_effector
+            return SimState(response.sim_time, np.array(state.position),
+                            np.array(state.velocity), np.array(state.effort),
+                            np.array([point.x, point.y, point.z]))
+        return step
+
+    def publish_pair(self, index, source, target):
+        msg = CorrespondenceSample(source_robot=self.robots["source"].name,
+                                   target_robot=self.robots["target"].name, index=index,
+                                   source=source.tolist(), target=target.tolist())
+        msg.header.stamp = sim_stamp(self.sim_time)
+        self.sample_pub.publish(msg)
+
+    def publish_batch(self, pairs):
+        msg = CorrespondenceBatch(source_robot=pairs.source_robot,
+                                  target_robot=pairs.target_robot,
+                                  pairing_rule=pairs.pairing_rule,
+                                  source=to_matrix(pairs.source), target=to_matrix(pairs.target))
+        msg.header.stamp = sim_stamp(self.sim_time)
+        self.batch_pub.publish(msg)
+
+    def fit(self, pairs):
+        request = FitModel.Request(model_id=self.model_id, source=to_matrix(pairs.source),
+                                   target=to_matrix(pairs.target), **self.fit_fields)
+        response = self.call(self.fit_client, request)
+        if not response.success:
+            raise RuntimeError(f"the mapping service could not fit {self.model_id!r}: "
+                               f"{response.message}")
+        self.get_logger().info(f"{response.message} (training RMSE "
+                               f"{response.training_rmse:.6g})")
+
+    # -- the run ----------------------------------------------------------------------------
+    def run(self):
+        clients = list(self.step_clients.values()) + ([self.fit_client] if self.model_id else [])
+        wait_for_services(clients, self.wait_timeout, self.stop)
+        wait_for_subscribers(self.sample_pub, self.wait_for_subscribers, self.wait_timeout,
+                             self.stop)
+        source, target = self.robots["source"], self.robots["target"]
+        self.get_logger().info(
+            f"babbling {source.name} -> {target.name}: {self.program.program}, "
+            f"{self.program.n_samples} samples, {self.pairing_rule}, seed {self.program.seed}")
+        pairs = collect_correspondences(
+            self.program, self.pairing_rule, self.kinematics["source"],
+            self.kinematics["target"], self.stepper("source"), self.stepper("target"),
+            self.steps_per_sample, self.features, self.task_offset, on_pair=self.publish_pair,
+            should_stop=self.stop.is_set)
+        pairs.source_robot, pairs.target_robot = source.name, target.name
+        pairs.metadata.update(seed=self.program.seed, program=self.program.program,
+                              steps_per_sample=self.steps_per_sample)
+        self.get_logger().info(f"collected {len(pairs)} pairs over {pairs.sim_time:.3f} s of "
+                               f"simulated time" + ("" if pairs.complete else " (stopped early)"))
+        self.publish_batch(pairs)
+        if self.output:
+            pairs.save(self.output)
+            self.get_logger().info(f"saved the correspondences to {self.output}")
+        if self.model_id and pairs.complete:
+            self.fit(pairs)
+        for publisher in (self.sample_pub, self.batch_pub):   # deliver before exiting
+            if not publisher.wait_for_all_acked(Duration(seconds=self.wait_timeout)):
+                self.get_logger().warning(f"{publisher.topic_name}: not all acknowledged")
+        return pairs
+
+
+def main(args=None):
+    stop = init_with_stop_event(args)
+    logger = rclpy.logging.get_logger("correspondence_collector")
+    node, code = None, 0
+    try:
+        node = CorrespondenceCollector(stop)
+        node.run()
+    except Exception as exc:  # a bad parameter, a refused step, a missing service: say what
+        logger.fatal(f"{type(exc).__name__}: {exc}" if not isinstance(exc, (ValueError,
+                     RuntimeError, OSError)) else str(exc))
+        code = 1
+    finally:
+        if node is not None:
+            node.executor.shutdown()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    raise SystemExit(code)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,192 @@
+"""correspondence_collector over real DDS: two robot_sim processes, lpa_mapping and a recorder.
+
+The collector's pairs must equal the library's own collection with in-process simulators (the
+lock-step graph is deterministic), reach the mapping service as a fitted model, be published
+one by one, and survive a recording: the player's replay of the bag, with no simulator
+running, reproduces the same correspondence set and refits the same model.
+"""
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from lpa_transfer.babbling import BabblingProgram, planar_kinematics
+from lpa_transfer.correspondences import collect_correspondences
+from lpa_transfer.model_store import ModelStore
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
+
+rclpy = pytest.importorskip("rclpy")
+from lpa_transfer_interfaces.msg import CorrespondenceSample  # noqa: E402
+from lpa_transfer_interfaces.srv import FitModel, ListModels  # noqa: E402
+from lpa_transfer_nodes._ros_util import SAMPLE_QOS  # noqa: E402
+
+ROBOTS = {side: ROOT / "scenarios" / "robots" / f"two_link_{side}.toml"
+          for side in ("source", "target")}
+PAIR = "two_link_source->two_link_target"
+PROGRAM = dict(program="joint_lines", n_segments=6, samples_per_segment=3, seed=7)
+STEPS = 200
+FIT = dict(method="lpa", n_min=5, c_min=0.0, random_state=3)
+
+
+def collector_params(**overrides):
+    params = dict(source_robot=ROBOTS["source"], target_robot=ROBOTS["target"],
+                  steps_per_sample=STEPS, wait_timeout=20.0, **PROGRAM, **FIT)
+    params.update(overrides)
+    return ros_params(**params)
+
+
+def library_pairs():
+    """The same collection with two in-process simulators (what the graph must reproduce)."""
+    robots = {side: load_robot_params(path) for side, path in ROBOTS.items()}
+    sims = {side: RobotSimulator(robot_urdf(robot)) for side, robot in robots.items()}
+    try:
+        return collect_correspondences(
+            BabblingProgram(**PROGRAM), "same_command", planar_kinematics(robots["source"]),
+            planar_kinematics(robots["target"]), sims["source"].step, sims["target"].step, STEPS)
+    finally:
+        for sim in sims.values():
+            sim.close()
+
+
+class PairListener(ClientNode):
+    """Collects CorrespondenceSample messages in the test process."""
+
+    def __init__(self, domain_id):
+        super().__init__(domain_id, "pair_listener")
+        self.samples = []
+        self.node.create_subscription(CorrespondenceSample, "/correspondences",
+                                      self.samples.append, SAMPLE_QOS)
+
+    def matrices(self):
+        ordered = sorted(self.samples, key=lambda msg: msg.index)
+        return (np.array([msg.source for msg in ordered]),
+                np.array([msg.target for msg in ordered]))
+
+
+def start_sims(domain_id, log_dir):
+    return [NodeProcess("robot_sim", domain_id, log_dir, name=f"{side}_sim",
+                        args=ros_params(robot=ROBOTS[side]) + ["-r", f"__ns:=/{side}"])
+            for side in ("source", "target")]
+
+
+def run_to_end(process, timeout=60):
+    process.process.wait(timeout)
+    return process.stop()
+
+
+@pytest.fixture(scope="module")
+def graph_run(tmp_path_factory):
+    """One collection over the graph, recorded; yields what the tests check."""
+    work = tmp_path_factory.mktemp("collector")
+    domain_id = unique_domain_id()
+    nodes = start_sims(domain_id, work) + [
+        NodeProcess("lpa_mapping", domain_id, work, ros_params(model_dir=work / "models")),
+        NodeProcess("recorder", domain_id, work,
+                    ros_params(output=work / "run.mcap", topics="[/correspondences]",
+                               discovery_period=0.1))]
+    listener = PairListener(domain_id)
+    try:
+        collector = NodeProcess("correspondence_collector", domain_id, work, collector_params(
+            output=work / "pairs.npz", model_id=PAIR, wait_for_subscribers=3))
+        code = run_to_end(collector)
+        listener.spin_until(lambda: len(listener.samples) >= 18, timeout=10,
+                            what="all 18 samples")
+        client = listener.node.create_client(ListModels, "/lpa_mapping/list")
+        models = listener.call(client, ListModels.Request()).model_ids
+        yield dict(work=work, code=code, log=collector.log(), samples=listener.matrices(),
+                   models=list(models), nodes=nodes)
+    finally:
+        listener.close()
+        for node in nodes:
+            node.stop()
+
+
+def test_the_graph_collects_what_the_library_collects(graph_run):
+    assert graph_run["code"] == 0, graph_run["log"]
+    expected = library_pairs()
+    with np.load(graph_run["work"] / "pairs.npz") as saved:
+        assert np.array_equal(saved["source"], expected.source)
+        assert np.array_equal(saved["target"], expected.target)
+        assert bool(saved["complete"]) and str(saved["pairing_rule"]) == "same_command"
+        assert float(saved["sim_time"]) == pytest.approx(18 * STEPS * 1e-3)
+    assert expected.source.shape == (18, 4)
+
+
+def test_every_pair_is_published_and_the_model_is_fitted(graph_run):
+    source, target = graph_run["samples"]
+    with np.load(graph_run["work"] / "pairs.npz") as saved:
+        assert np.array_equal(source, saved["source"]) and np.array_equal(target,
+                                                                           saved["target"])
+    assert PAIR in graph_run["models"]
+    model = ModelStore(graph_run["work"] / "models").get(PAIR)
+    assert model.n_correspondences_ == 18
+
+
+def test_replayed_bag_reproduces_the_set_and_refits_without_simulators(graph_run, tmp_path):
+    for node in graph_run["nodes"]:
+        assert node.stop() == 0, node.log()
+    domain_id = unique_domain_id()           # a fresh graph: no simulator, no collector
+    mapping = NodeProcess("lpa_mapping", domain_id, tmp_path,
+                          ros_params(model_dir=tmp_path / "models"))
+    listener = PairListener(domain_id)
+    try:
+        listener.spin_for(1.0)
+        player = NodeProcess("player", domain_id, tmp_path, ros_params(
+            input=graph_run["work"] / "run.mcap", rate=0.0, wait_for_subscribers=2,
+            wait_timeout=20.0))
+        assert run_to_end(player) == 0, player.log()
+        listener.spin_until(lambda: len(listener.samples) >= 18, timeout=10,
+                            what="the replayed samples")
+        replayed = listener.matrices()
+        with np.load(graph_run["work"] / "pairs.npz") as saved:
+            assert np.array_equal(replayed[0], saved["source"])
+            assert np.array_equal(replayed[1], saved["target"])
+        fit = listener.node.create_client(FitModel, "/lpa_mapping/fit")
+        answer = listener.call(fit, FitModel.Request(model_id="refit", received_pair=PAIR,
+                                                     **FIT))
+        assert answer.success, answer.message + mapping.log()
+        assert answer.n_points == 18
+    finally:
+        listener.close()
+        mapping.stop()
+    refit = ModelStore(tmp_path / "models").get("refit")
+    original = ModelStore(graph_run["work"] / "models").get(PAIR)
+    probe = replayed[0]
+    assert np.array_equal(refit.transfer(probe), original.transfer(probe))
+
+
+def test_sigint_saves_the_pairs_made_so_far(tmp_path):
+    domain_id = unique_domain_id()
+    sims = start_sims(domain_id, tmp_path)
+    try:
+        collector = NodeProcess("correspondence_collector", domain_id, tmp_path,
+                                collector_params(n_segments=2000, output=tmp_path / "p.npz"))
+        wait_until(lambda: "babbling" in collector.log(), timeout=30, what="collection start")
+        time.sleep(1.0)
+        assert collector.stop(signal.SIGINT) == 0, collector.log()
+    finally:
+        for sim in sims:
+            sim.stop()
+    with np.load(tmp_path / "p.npz") as saved:
+        assert not bool(saved["complete"])
+        assert 0 < len(saved["source"]) < 2000 * 3
+        assert len(saved["source"]) == len(saved["target"])
+    assert "stopped early" in collector.log()
+
+
+def test_missing_robot_service_is_a_clear_error(tmp_path):
+    collector = NodeProcess("correspondence_collector", unique_domain_id(), tmp_path,
+                            collector_params(wait_timeout=1.0))
+    assert run_to_end(collector, timeout=30) == 1
+    assert "/source/robot_sim/step is not available after 1 s" in collector.log()
+
+
+def test_bad_parameters_are_a_clear_error(tmp_path):
+    collector = NodeProcess("correspondence_collector", unique_domain_id(), tmp_path,
+                            collector_params(pairing_rule="same_colour", wait_timeout=1.0))
+    assert run_to_end(collector, timeout=30) == 1
+    assert "pairing_rule must be one of" in collector.log()
