@@ -289,3 +289,22 @@ def _read_truncated(stream, topics):
                              message.publish_time)
     except (McapError, EOFError, struct.error, ValueError):
         return  # the file ends inside a record: everything complete has been yielded
+
+
+def describe(path):
+    """A ``ros2 bag info``-like text: duration, message counts and types per topic."""
+    with open(path, "rb") as stream:
+        _, info = _open_reader(stream, path)
+    stats = info.statistics
+    duration = (stats.message_end_time - stats.message_start_time) * 1e-9 if stats else 0.0
+    lines = [f"bag {path}: {stats.message_count if stats else 0} messages over "
+             f"{duration:.3f} s (wall clock)"]
+    lines += [f"  {topic:<40} {topic_info.message_count:>8}  {topic_info.type_name}"
+              for topic, topic_info in sorted(summary(path).items())]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    # python -m lpa_transfer.bag FILE.mcap ...: the stand-in for `ros2 bag info`.
+    for argument in sys.argv[1:]:
+        print(describe(argument), end="")

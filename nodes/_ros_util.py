@@ -6,6 +6,7 @@ import threading
 import time
 import traceback
 
+import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.exceptions import ParameterUninitializedException
@@ -18,7 +19,9 @@ from builtin_interfaces.msg import Time
 
 from lpa_transfer.bag import split_type_name
 from lpa_transfer.model_store import matrix_from_rows
+from lpa_transfer.simulator import SimState
 from lpa_transfer_interfaces.msg import Matrix
+from lpa_transfer_interfaces.srv import StepRobot
 
 
 #: Correspondence topics: every sample must arrive (reliable, deep queue); the batch is
@@ -175,3 +178,20 @@ def call_service(executor, client, request, timeout):
             raise ServiceTimeout(f"service {client.srv_name} did not answer within {timeout:g} s")
         executor.spin_once(timeout_sec=0.05)
     return future.result()
+
+
+def robot_stepper(call, client, name):
+    """``step(command, n_steps) -> SimState`` over a robot_sim's StepRobot service.
+
+    ``call(client, request)`` makes the blocking call (e.g. :func:`call_service` bound to an
+    executor); a refused step raises RuntimeError with the simulator's message.
+    """
+    def step(command, n_steps):
+        response = call(client, StepRobot.Request(command=[float(c) for c in command],
+                                                  n_steps=int(n_steps)))
+        if not response.success:
+            raise RuntimeError(f"the {name} robot refused a step: {response.message}")
+        state, point = response.joint_state, response.end_effector
+        return SimState(response.sim_time, np.array(state.position), np.array(state.velocity),
+                        np.array(state.effort), np.array([point.x, point.y, point.z]))
+    return step

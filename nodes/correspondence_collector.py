@@ -55,12 +55,11 @@ from lpa_transfer.babbling import BabblingProgram, planar_kinematics
 from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
                                           collect_correspondences)
 from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import SimState
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
-                                          init_with_stop_event, sim_stamp, to_matrix,
-                                          wait_for_services, wait_for_subscribers)
+                                          init_with_stop_event, robot_stepper, sim_stamp,
+                                          to_matrix, wait_for_services, wait_for_subscribers)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
@@ -118,21 +117,15 @@ class CorrespondenceCollector(Node):
         return call_service(self.spinner, client, request, self.call_timeout)
 
     def stepper(self, side):
-        client = self.step_clients[side]
+        step = robot_stepper(self.call, self.step_clients[side], side)
+        if side == "target":
+            return step
 
-        def step(command, n_steps):
-            response = self.call(client, StepRobot.Request(
-                command=[float(c) for c in command], n_steps=int(n_steps)))
-            if not response.success:
-                raise RuntimeError(f"the {side} robot refused a step: {response.message}")
-            state = response.joint_state
-            if side == "source":
-                self.sim_time = response.sim_time
-            point = response.end_effector
-            return SimState(response.sim_time, np.array(state.position),
-                            np.array(state.velocity), np.array(state.effort),
-                            np.array([point.x, point.y, point.z]))
-        return step
+        def step_source(command, n_steps):      # remembers the clock for the pairs' stamps
+            state = step(command, n_steps)
+            self.sim_time = state.time
+            return state
+        return step_source
 
     def publish_pair(self, index, source, target):
         msg = CorrespondenceSample(source_robot=self.robots["source"].name,
