@@ -23,18 +23,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lpa_transfer.planar_chain import load_fixed_robot, planar_chain_urdf
+from lpa_transfer.planar_chain import load_fixed_robot
+from lpa_transfer.serial_chain import serial_chain_urdf
 
 CONTROL_MODES = ("position", "torque")
 
 
 def robot_urdf(robot):
-    """URDF text of a :class:`lpa_transfer.robot_params.RobotParams` planar chain.
+    """URDF text of a :class:`lpa_transfer.robot_params.RobotParams` chain, planar or serial.
 
-    Uses the file's link masses and effort limits (their defaults when the file has none).
+    :func:`lpa_transfer.serial_chain.serial_chain_urdf`: the file's masses, centres of mass,
+    inertias, limits (a planar file's derived ones: the rods of ``planar_chain_urdf``).
     """
-    return planar_chain_urdf(robot.link_lengths, robot.link_masses, robot.joint_limits,
-                             robot.effort_limits, name=robot.name)
+    return serial_chain_urdf(robot)
 
 
 @dataclass(frozen=True, eq=False)

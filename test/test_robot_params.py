@@ -77,3 +77,117 @@ def test_masses_and_effort_limits_are_optional_with_defaults(tmp_path):
     np.testing.assert_array_equal(robot.effort_limits, [12.5, DEFAULT_EFFORT_LIMIT])
     with pytest.raises(ValueError, match=r"links\[0\]: key 'mass' must be positive"):
         load_robot_params(write(tmp_path, VALID.replace("length = 0.3", "length = 0.3\nmass = 0")))
+
+
+# -- general serial chains (kind = "serial") -----------------------------------------------
+SERIAL = """name = "arm"
+source = "test"
+kind = "serial"
+[base]
+xyz = [0.0, 0.0, 0.1]
+[[joints]]
+xyz = [0.0, 0.0, 0.05]
+axis = [0.0, 0.0, 2.0]
+lower = -1.0
+upper = 1.0
+effort = 10.0
+velocity = 2.0
+[[joints]]
+xyz = [0.0, 0.0, 0.3]
+rpy = [0.0, 0.5, 0.0]
+axis = [0.0, 1.0, 0.0]
+lower = -2.0
+upper = 2.0
+effort = 5.0
+velocity = 3.0
+[[links]]
+mass = 1.0
+com = [0.0, 0.0, 0.1]
+inertia = { ixx = 0.01, ixy = 0.0, ixz = 0.0, iyy = 0.01, iyz = 0.0, izz = 0.005 }
+[[links]]
+mass = 0.5
+com = [0.1, 0.0, 0.0]
+inertia = { ixx = 0.0005, ixy = 0.0001, ixz = 0.0, iyy = 0.002, iyz = 0.0, izz = 0.002 }
+[tool]
+xyz = [0.2, 0.0, 0.0]
+"""
+
+
+def test_serial_file_fills_the_general_fields(tmp_path):
+    robot = load_robot_params(write(tmp_path, SERIAL))
+    assert robot.kind == "serial" and robot.n_joints == 2
+    np.testing.assert_array_equal(robot.joint_xyz, [[0, 0, 0.05], [0, 0, 0.3]])
+    np.testing.assert_array_equal(robot.joint_rpy, [[0, 0, 0], [0, 0.5, 0]])   # rpy optional
+    np.testing.assert_array_equal(robot.joint_axes, [[0, 0, 1], [0, 1, 0]])     # normalised
+    np.testing.assert_array_equal(robot.velocity_limits, [2.0, 3.0])
+    np.testing.assert_array_equal(robot.link_inertias[1][0], [0.0005, 0.0001, 0.0])
+    np.testing.assert_array_equal(robot.base_xyz, [0, 0, 0.1])
+    np.testing.assert_array_equal(robot.base_rpy, [0, 0, 0])
+    np.testing.assert_array_equal(robot.tool_rpy, [0, 0, 0])
+    # link i reaches from joint i to joint i + 1 (the tool for the last joint)
+    np.testing.assert_allclose(robot.link_lengths, [0.3, 0.2])
+    with pytest.raises(ValueError):
+        robot.link_inertias[0, 0, 0] = 1.0   # read-only
+
+
+def test_planar_file_is_the_planar_special_case(tmp_path):
+    """Derived general fields: joints about z at the previous link's end, rods along x."""
+    from lpa_transfer.robot_params import DEFAULT_VELOCITY_LIMIT, ROD_AXIAL_SHARE
+
+    robot = load_robot_params(ROBOTS / "two_link_source.toml")
+    assert robot.kind == "planar"
+    np.testing.assert_array_equal(robot.joint_xyz, [[0, 0, 0], [0.3, 0, 0]])
+    np.testing.assert_array_equal(robot.joint_axes, [[0, 0, 1], [0, 0, 1]])
+    np.testing.assert_array_equal(robot.link_coms, [[0.15, 0, 0], [0.125, 0, 0]])
+    np.testing.assert_allclose(np.diagonal(robot.link_inertias[0]),
+                               0.6 * 0.3 ** 2 * np.array([ROD_AXIAL_SHARE, 1 / 12, 1 / 12]))
+    np.testing.assert_array_equal(robot.tool_xyz, [0.25, 0, 0])
+    np.testing.assert_array_equal(robot.velocity_limits, [DEFAULT_VELOCITY_LIMIT] * 2)
+    text = VALID.replace("upper = 1.0\n[[joints]]", "upper = 1.0\nvelocity = 2.5\n[[joints]]")
+    faster = load_robot_params(write(tmp_path, text))
+    np.testing.assert_array_equal(faster.velocity_limits, [2.5, DEFAULT_VELOCITY_LIMIT])
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('kind = "serial"', 'kind = "spherical"', "key 'kind' must be one of"),
+    ("axis = [0.0, 0.0, 2.0]\n", "", r"joints\[0\]: missing key 'axis'"),
+    ("axis = [0.0, 0.0, 2.0]", "axis = [0.0, 0.0, 0.0]",
+     r"joints\[0\]: key 'axis' must be a non-zero"),
+    ("xyz = [0.0, 0.0, 0.05]", "xyz = [0.0, 0.05]", r"joints\[0\]: key 'xyz' must be a list of 3"),
+    ("rpy = [0.0, 0.5, 0.0]", 'rpy = [0.0, "a", 0.0]', r"joints\[1\]: key 'rpy' must be a finite"),
+    ("effort = 5.0\n", "", r"joints\[1\]: missing key 'effort'"),
+    ("velocity = 3.0", "velocity = -3.0", r"joints\[1\]: key 'velocity' must be positive"),
+    ("lower = -2.0", "lower = 3.0", r"joints\[1\]: key 'lower' \(3.0\) is greater"),
+    ("mass = 0.5", "mass = -0.5", r"links\[1\]: key 'mass' must be positive"),
+    ("com = [0.1, 0.0, 0.0]\n", "", r"links\[1\]: missing key 'com'"),
+    ("inertia = { ixx = 0.01, ixy = 0.0, ", "inertia = { ixx = 0.01, ",
+     r"links\[0\]: inertia: missing key 'ixy'"),
+    ("iyy = 0.002, iyz", "iyy = -0.002, iyz",
+     r"links\[1\]: key 'inertia' is not positive definite"),
+    ("ixy = 0.0001", "ixy = 0.01", r"links\[1\]: key 'inertia' is not positive definite"),
+    ("izz = 0.005", "izz = 0.05", r"links\[0\]: key 'inertia' violates the triangle inequality"),
+    ("[[links]]\nmass = 0.5", "[[nothing]]\nmass = 0.5", r"2 \[\[joints\]\] but 1 \[\[links\]\]"),
+    ('[tool]\nxyz = [0.2, 0.0, 0.0]\n', "", r"missing '\[tool\]' table"),
+    ("[base]\nxyz = [0.0, 0.0, 0.1]", "[base]\nxyz = 0.1", r"base: key 'xyz' must be a list of 3"),
+])
+def test_broken_serial_file_names_file_and_key(tmp_path, old, new, message):
+    assert old in SERIAL
+    path = write(tmp_path, SERIAL.replace(old, new, 1))
+    with pytest.raises(ValueError, match=message) as info:
+        load_robot_params(path)
+    assert str(path) in str(info.value)
+
+
+def test_planar_file_may_not_place_its_base(tmp_path):
+    path = write(tmp_path, VALID + "[base]\nxyz = [1.0, 0.0, 0.0]\n")
+    with pytest.raises(ValueError, match=r"'\[base\]' table needs kind = \"serial\""):
+        load_robot_params(path)
+
+
+def test_direct_construction_checks_shapes():
+    from lpa_transfer.robot_params import RobotParams
+
+    with pytest.raises(ValueError, match=r"joint_axes must have shape \(2, 3\)"):
+        RobotParams("arm", [0.3, 0.2], [(0, 1), (0, 1)], "test", joint_axes=[[0, 0, 1]])
+    with pytest.raises(ValueError, match="kind must be one of"):
+        RobotParams("arm", [0.3], [(0, 1)], "test", kind="spherical")

@@ -134,3 +134,22 @@ def test_urdf_file_path_and_three_links(tmp_path):
         state = sim.state()
         expected = planar_forward_kinematics(state.positions[None], [0.2, 0.2, 0.1])[0]
         np.testing.assert_allclose(state.end_effector[:2], expected, atol=1e-6)
+
+
+def test_serial_chain_files_run_in_the_simulator():
+    """robot_urdf of a kind = "serial" file: the youBot tracks a pose in position mode, and
+    the Pincher's torques are clipped to its 2.5 N·m (thesis §5.5.1)."""
+    from lpa_transfer.serial_chain import forward_kinematics
+
+    robots = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
+    youbot = load_robot_params(robots / "youbot_arm.toml")
+    target = [0.5, 0.6, -0.8, 0.4, 1.0]
+    with RobotSimulator(robot_urdf(youbot)) as sim:
+        state = sim.step(target, 1500)
+    np.testing.assert_allclose(state.positions, target, atol=1e-3)
+    np.testing.assert_allclose(state.end_effector, forward_kinematics(youbot, [state.positions])[0],
+                               atol=1e-6)
+    pincher = load_robot_params(robots / "pincher_arm.toml")
+    with RobotSimulator(robot_urdf(pincher), "torque") as sim:
+        np.testing.assert_array_equal(sim.step([5.0, -5.0, 1.0, 0.0], 1).efforts,
+                                      [2.5, -2.5, 1.0, 0.0])

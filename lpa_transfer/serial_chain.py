@@ -1,0 +1,118 @@
+"""URDF and forward kinematics of a :class:`~lpa_transfer.robot_params.RobotParams` chain.
+
+Frames follow URDF (module docstring of :mod:`lpa_transfer.robot_params`); the world frame
+is the simulator's, gravity −9.81 m/s² along −y
+(:func:`lpa_transfer.planar_chain.load_fixed_robot`), and
+
+    T_tool(q) = B · Π_i [T(xyz_i) R(rpy_i) Rot(axis_i, q_i)] · T(tool_xyz) R(tool_rpy),
+
+B the base placement, R(r, p, y) = Rz(y) Ry(p) Rx(r), Rot by Rodrigues' formula. This
+T_tool is the forward kinematics the chapter 5 tasks are tracked in (§5.5.1: the robots
+track 'star' figures with their end effectors). Pure numpy; pybullet only reads the URDF.
+"""
+import numpy as np
+
+from ._validation import as_matrix
+
+
+def rpy_matrix(rpy):
+    """R(roll, pitch, yaw) = Rz(yaw) Ry(pitch) Rx(roll) (URDF's fixed-axis convention)."""
+    (cr, cp, cy), (sr, sp, sy) = np.cos(rpy), np.sin(rpy)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def matrix_rpy(rotation):
+    """(roll, pitch, yaw) of a rotation matrix, the inverse of :func:`rpy_matrix`."""
+    r = np.asarray(rotation, dtype=np.float64)
+    pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
+    if np.hypot(r[0, 0], r[1, 0]) < 1e-12:            # gimbal lock: put it all in yaw
+        return np.array([0.0, pitch, np.arctan2(-r[0, 1], r[1, 1])])
+    return np.array([np.arctan2(r[2, 1], r[2, 2]), pitch, np.arctan2(r[1, 0], r[0, 0])])
+
+
+def _transform(xyz, rpy):
+    transform = np.eye(4)
+    transform[:3, :3], transform[:3, 3] = rpy_matrix(rpy), xyz
+    return transform
+
+
+def _axis_rotations(axis, angles):
+    """Rot(axis, q) for each q (N, 4, 4): R = I + sin q K + (1 − cos q) K² (Rodrigues)."""
+    x, y, z = axis
+    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
+    rotations = np.tile(np.eye(4), (len(angles), 1, 1))
+    rotations[:, :3, :3] += s * k + (1 - c) * (k @ k)
+    return rotations
+
+
+def tool_transforms(robot, q):
+    """Homogeneous end-effector transforms T_tool(q) (N, 4, 4) in the world frame."""
+    q = as_matrix(q, "q")
+    if q.shape[1] != robot.n_joints:
+        raise ValueError(f"q must have shape (N, {robot.n_joints}) (one row of joint angles per "
+                         f"sample), got shape {q.shape}")
+    frames = np.tile(_transform(robot.base_xyz, robot.base_rpy), (len(q), 1, 1))
+    for i in range(robot.n_joints):
+        origin = _transform(robot.joint_xyz[i], robot.joint_rpy[i])
+        frames = frames @ origin @ _axis_rotations(robot.joint_axes[i], q[:, i])
+    return frames @ _transform(robot.tool_xyz, robot.tool_rpy)
+
+
+def forward_kinematics(robot, q):
+    """End-effector positions (N, 3) in the world frame for joint angles ``q`` (N, n)."""
+    return tool_transforms(robot, q)[:, :3, 3]
+
+
+def _numbers(values):
+    return " ".join(f"{v:.17g}" for v in values)
+
+
+def _inertial(mass, com, inertia):
+    ixx, ixy, ixz, iyy, iyz, izz = np.asarray(inertia)[np.triu_indices(3)]
+    return (f'<inertial><origin xyz="{_numbers(com)}"/><mass value="{mass:.17g}"/>'
+            f'<inertia ixx="{ixx:.17g}" ixy="{ixy:.17g}" ixz="{ixz:.17g}" iyy="{iyy:.17g}" '
+            f'iyz="{iyz:.17g}" izz="{izz:.17g}"/></inertial>')
+
+
+def serial_chain_urdf(robot):
+    """URDF text of a robot chain, masses, centres of mass and inertias from its file.
+
+    Links ``base`` (massless; the world frame), ``link1..linkn`` on revolute joints
+    ``joint1..jointn``, a massless ``tool`` on the fixed ``tool_joint`` — the names of
+    :func:`lpa_transfer.planar_chain.planar_chain_urdf`. The base placement is folded into
+    joint1's origin, so the simulator's last link is the tool. Joint damping and friction
+    are zero; pybullet enforces neither effort nor velocity limits.
+    """
+    massless = _inertial(0.0, np.zeros(3), np.zeros((3, 3)))
+    parts = [f'<?xml version="1.0"?>\n<robot name="{robot.name}">\n'
+             f'  <link name="base">{massless}</link>']
+    first = _transform(robot.base_xyz, robot.base_rpy) @ _transform(robot.joint_xyz[0],
+                                                                     robot.joint_rpy[0])
+    parent = "base"
+    for i in range(robot.n_joints):
+        xyz, rpy = ((first[:3, 3], matrix_rpy(first[:3, :3])) if i == 0
+                    else (robot.joint_xyz[i], robot.joint_rpy[i]))
+        (lower, upper), child = robot.joint_limits[i], f"link{i + 1}"
+        parts.append(
+            f'  <link name="{child}">'
+            f'{_inertial(robot.link_masses[i], robot.link_coms[i], robot.link_inertias[i])}'
+            f'</link>\n'
+            f'  <joint name="joint{i + 1}" type="revolute">\n'
+            f'    <parent link="{parent}"/><child link="{child}"/>\n'
+            f'    <origin xyz="{_numbers(xyz)}" rpy="{_numbers(rpy)}"/>'
+            f'<axis xyz="{_numbers(robot.joint_axes[i])}"/>\n'
+            f'    <limit lower="{lower:.17g}" upper="{upper:.17g}" '
+            f'effort="{robot.effort_limits[i]:.17g}" velocity="{robot.velocity_limits[i]:.17g}"/>\n'
+            f'    <dynamics damping="0" friction="0"/>\n'
+            f'  </joint>')
+        parent = child
+    parts.append(f'  <link name="tool">{massless}</link>\n'
+                 f'  <joint name="tool_joint" type="fixed">\n'
+                 f'    <parent link="{parent}"/><child link="tool"/>\n'
+                 f'    <origin xyz="{_numbers(robot.tool_xyz)}" '
+                 f'rpy="{_numbers(robot.tool_rpy)}"/>\n'
+                 f'  </joint>\n</robot>\n')
+    return "\n".join(parts)
