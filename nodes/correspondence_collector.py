@@ -43,6 +43,7 @@ simulated time) and, when done, ``correspondence_batch`` (CorrespondenceBatch, t
 set; transient local, so a late subscriber still gets it).
 """
 import os
+import time
 
 import numpy as np
 import rclpy
@@ -162,6 +163,7 @@ class CorrespondenceCollector(Node):
         self.get_logger().info(
             f"babbling {source.name} -> {target.name}: {self.program.program}, "
             f"{self.program.n_samples} samples, {self.pairing_rule}, seed {self.program.seed}")
+        start = time.perf_counter()
         pairs = collect_correspondences(
             self.program, self.pairing_rule, self.kinematics["source"],
             self.kinematics["target"], self.stepper("source"), self.stepper("target"),
@@ -170,8 +172,11 @@ class CorrespondenceCollector(Node):
         pairs.source_robot, pairs.target_robot = source.name, target.name
         pairs.metadata.update(seed=self.program.seed, program=self.program.program,
                               steps_per_sample=self.steps_per_sample)
-        self.get_logger().info(f"collected {len(pairs)} pairs over {pairs.sim_time:.3f} s of "
-                               f"simulated time" + ("" if pairs.complete else " (stopped early)"))
+        wall = time.perf_counter() - start
+        self.get_logger().info(
+            f"collected {len(pairs)} pairs over {pairs.sim_time:.3f} s of simulated time in "
+            f"{wall:.3f} s ({pairs.sim_time / wall:.1f}x real time)"
+            + ("" if pairs.complete else " (stopped early)"))
         self.publish_batch(pairs)
         if self.output:
             pairs.save(self.output)
