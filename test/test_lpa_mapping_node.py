@@ -135,6 +135,9 @@ BAD_REQUESTS = {
     "empty id": ("fit", dict(model_id="", method="pa", source=_bad(), target=_bad()),
                  "non-empty"),
     "describe unknown": ("describe", dict(model_id="nao"), "unknown model id"),
+    "no correspondences": ("fit", dict(model_id="x", method="pa"), "no correspondences"),
+    "pair never received": ("fit", dict(model_id="x", method="pa", received_pair="a->b"),
+                            "no correspondences received for the robot pair 'a->b'"),
 }
 
 

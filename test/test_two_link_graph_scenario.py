@@ -1,7 +1,9 @@
 """The 2-link graph scenario (scenarios/two_link_graph/run.sh) end to end, small config."""
 import json
 import os
+import signal
 import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -9,7 +11,7 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.bag import read_messages, summary
 from lpa_transfer.model_store import ModelStore
-from ros_harness import unique_domain_id
+from ros_harness import unique_domain_id, wait_until
 
 SCENARIO = ROOT / "scenarios" / "two_link_graph"
 MODEL_ID = "two_link_source->two_link_target"
@@ -70,3 +72,24 @@ def test_refuses_to_clear_a_foreign_directory(tmp_path):
                             capture_output=True, text=True, timeout=30)
     assert result.returncode == 2 and "not a run directory" in result.stderr
     assert (tmp_path / "precious.txt").read_text() == "keep me"
+
+
+def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
+    """SIGINT to the script's process group (what Ctrl-C in a terminal sends) mid-collection."""
+    out = tmp_path / "run"
+    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
+    script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                              start_new_session=True)
+    collector_log = out / "logs" / "correspondence_collector.log"
+    wait_until(lambda: collector_log.exists() and "babbling" in collector_log.read_text(),
+               timeout=60, what="the collection to start")
+    time.sleep(1.0)
+    os.killpg(script.pid, signal.SIGINT)
+    _, stderr = script.communicate(timeout=60)
+    assert script.returncode == 130, stderr
+    topics = summary(out / "run.mcap")            # a finalised file: its summary is readable
+    with np.load(out / "correspondences.npz") as pairs:
+        assert not bool(pairs["complete"])
+        assert 0 < len(pairs["source"]) < 400
+        assert topics["/correspondences"].message_count == len(pairs["source"])
