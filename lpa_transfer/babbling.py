@@ -25,6 +25,7 @@ import numpy as np
 from . import inverse_kinematics
 from ._validation import check_int
 from .kinematics import planar_forward_kinematics
+from .serial_chain import forward_kinematics
 
 PROGRAMS = ("joint_lines", "task_lines")
 _TASK_STREAM = 2 ** 20   # seed-sequence key of the task-space waypoints (joints use 0..n-1)
@@ -67,6 +68,17 @@ def planar_kinematics(robot, home=None):
     return Kinematics(np.array(robot.joint_limits, dtype=np.float64),
                       home_pose(robot.joint_limits, home),
                       lambda q: planar_forward_kinematics(q, lengths))
+
+
+def robot_kinematics(robot, home=None):
+    """:class:`Kinematics` of any robot file: planar chains in (x, y)
+    (:func:`planar_kinematics`), serial chains in world (x, y, z)
+    (:func:`lpa_transfer.serial_chain.forward_kinematics`)."""
+    if robot.kind == "planar":
+        return planar_kinematics(robot, home)
+    return Kinematics(np.array(robot.joint_limits, dtype=np.float64),
+                      home_pose(robot.joint_limits, home),
+                      lambda q: forward_kinematics(robot, q))
 
 
 def polyline(start, waypoints, samples_per_segment):

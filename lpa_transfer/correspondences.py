@@ -24,6 +24,7 @@ difference of velocities), ``effort`` (one value per joint) and ``ee_x``/``ee_y`
 z = (q, x) of a planar arm.
 """
 import os
+import zipfile
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -100,9 +101,10 @@ class CorrespondenceSet:
 
 def load_correspondences(path):
     """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
+    unreadable = (OSError, EOFError, ValueError, zipfile.BadZipFile)   # e.g. a truncated file
     try:
         archive = np.load(os.fspath(path), allow_pickle=False)
-    except (OSError, EOFError, ValueError) as exc:
+    except unreadable as exc:
         raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
     if not isinstance(archive, np.lib.npyio.NpzFile):
         raise ValueError(f"correspondence file {path} is not an .npz archive")
@@ -111,7 +113,10 @@ def load_correspondences(path):
         if missing:
             raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
                              f"(has {archive.files})")
-        return archive["source"], archive["target"]
+        try:
+            return archive["source"], archive["target"]
+        except unreadable as exc:   # a damaged member, object arrays
+            raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
 
 
 def shared_limits(source, target):

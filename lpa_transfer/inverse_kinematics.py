@@ -15,6 +15,7 @@ near singularities); the returned residual says how far that is.
 import numpy as np
 
 FD_STEP = 1e-7
+MAX_HALVINGS = 30   # step halvings before an iteration counts as not shrinking the error
 
 
 def jacobian(forward, q):
@@ -28,8 +29,10 @@ def solve(forward, x_target, q_start, joint_limits, damping=0.01, tolerance=1e-7
           max_iterations=200):
     """Joint angles reaching ``x_target`` from ``q_start``: ``(q, residual)``.
 
-    Damped least squares (module docstring) with joint limits enforced by clipping; stops when
-    the task-space error is below ``tolerance`` (m) or stops shrinking. ``residual`` is the
+    Damped least squares (module docstring) with joint limits enforced by clipping; joints at
+    a limit that the step would push beyond are left out of the step, and a step that does not
+    shrink the error is halved (up to ``MAX_HALVINGS`` times). Stops when the
+    task-space error is below ``tolerance`` (m) or stops shrinking. ``residual`` is the
     remaining distance ||forward(q) − x_target||.
     """
     limits = np.asarray(joint_limits, dtype=np.float64)
@@ -40,13 +43,24 @@ def solve(forward, x_target, q_start, joint_limits, damping=0.01, tolerance=1e-7
         if np.linalg.norm(error) < tolerance:
             break
         J = jacobian(forward, q)
-        step = J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(len(error)), error)
-        q_next = np.clip(q + step, limits[:, 0], limits[:, 1])
-        error_next = x_target - forward(q_next[None])[0]
-        if np.linalg.norm(error_next) >= np.linalg.norm(error) * (1 - 1e-9):
+        step = _dls_step(J, error, damping)
+        pinned = ((q <= limits[:, 0]) & (step < 0)) | ((q >= limits[:, 1]) & (step > 0))
+        if pinned.any():   # joints held at a limit: the step of the others without them
+            step = _dls_step(J * ~pinned, error, damping)
+        for _ in range(MAX_HALVINGS + 1):   # a full step can overshoot far from the target
+            q_next = np.clip(q + step, limits[:, 0], limits[:, 1])
+            error_next = x_target - forward(q_next[None])[0]
+            if np.linalg.norm(error_next) < np.linalg.norm(error) * (1 - 1e-9):
+                break
+            step = step / 2
+        else:
             break
         q, error = q_next, error_next
     return q, float(np.linalg.norm(error))
+
+
+def _dls_step(J, error, damping):
+    return J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(len(error)), error)
 
 
 def solve_path(forward, points, q_start, joint_limits, **options):

@@ -52,7 +52,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from lpa_transfer.babbling import BabblingProgram, planar_kinematics
+from lpa_transfer.babbling import BabblingProgram, robot_kinematics
 from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
                                           collect_correspondences)
 from lpa_transfer.robot_params import load_robot_params
@@ -81,7 +81,7 @@ class CorrespondenceCollector(Node):
         self.robots = {side: load_robot_params(required_path(declare(f"{side}_robot", ""),
                                                              f"{side}_robot"))
                        for side in ("source", "target")}
-        self.kinematics = {side: planar_kinematics(robot, doubles(f"{side}_home") or None)
+        self.kinematics = {side: robot_kinematics(robot, doubles(f"{side}_home") or None)
                            for side, robot in self.robots.items()}
         self.pairing_rule = check_pairing_rule(declare("pairing_rule", "same_command"))
         self.program = BabblingProgram(
