@@ -1,0 +1,89 @@
+"""Star tasks (thesis §5.5.1), PID feedback and the PID position servo (§5.4.1)."""
+import numpy as np
+import pytest
+
+from lpa_transfer.babbling import robot_kinematics
+from lpa_transfer.control import PID, start_servo
+from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.tasks import (minimum_jerk, joint_trajectory, star_tips, star_trajectory,
+                                tracking_error)
+from two_link import robot
+
+DT = 0.01
+
+
+def test_minimum_jerk_starts_and_ends_at_rest():
+    s = minimum_jerk(60)
+    assert s[-1] == pytest.approx(1.0) and np.all(np.diff(s) > 0)
+    velocity = np.diff(np.concatenate(([0.0], s)))
+    assert velocity[0] < 1e-3 and velocity[-1] < 1e-3 and velocity.max() > 0.02
+
+
+def test_star_has_seven_lines_of_one_radius_and_lasts_8_4_s():
+    centre, u, v = np.array([0.2, 0.1, 0.0]), np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
+    tips = star_tips(centre, u, v, 0.05)
+    assert tips.shape == (7, 3)
+    assert np.allclose(np.linalg.norm(tips - centre, axis=1), 0.05) and np.allclose(tips[:, 2], 0)
+    path = star_trajectory(centre, u, v, 0.05, DT)
+    assert path.shape == (840, 3)                      # 7 lines x 1.2 s at 100 Hz = 8.4 s
+    assert np.allclose(path[59], tips[0]) and np.allclose(path[119], centre)
+    assert np.allclose(path[179], tips[1]) and np.allclose(path[-1], centre)
+    distance = np.linalg.norm(path - centre, axis=1)
+    assert distance.max() == pytest.approx(0.05)       # straight lines: never beyond a tip
+
+
+def test_star_spread_and_errors():
+    tips = star_tips([0, 0], [1, 0], [0, 1], 1.0, spread=np.pi / 2)
+    assert np.allclose(tips[0], [1, 0]) and np.allclose(tips[-1], [0, 1])
+    with pytest.raises(ValueError, match="radius must be positive"):
+        star_tips([0, 0], [1, 0], [0, 1], 0.0)
+    with pytest.raises(ValueError, match="one length"):
+        star_tips([0, 0, 0], [1, 0], [0, 1], 1.0)
+    with pytest.raises(ValueError, match="longer than a leg"):
+        star_trajectory([0, 0], [1, 0], [0, 1], 1.0, dt=2.0)
+
+
+def test_joint_trajectory_follows_the_task_through_inverse_kinematics():
+    kinematics = robot_kinematics(robot("two_link_target"))
+    q_start = np.array([0.5, 1.2])
+    centre = kinematics.forward(q_start[None])[0]
+    path = star_trajectory(centre, [1, 0], [0, 1], 0.05, DT)
+    q, qd, qdd, residuals = joint_trajectory(kinematics, path, q_start, DT)
+    assert residuals.max() < 1e-6
+    assert np.allclose(kinematics.forward(q), path, atol=1e-6)
+    assert np.allclose(qd, np.gradient(q, DT, axis=0)) and np.allclose(qdd,
+                                                                        np.gradient(qd, DT, axis=0))
+
+
+def test_tracking_error_is_the_mean_distance():
+    desired = np.zeros((4, 2))
+    actual = np.array([[3.0, 4.0], [0, 0], [0, 1.0], [0, 0]])
+    assert tracking_error(desired, actual) == pytest.approx(1.5)
+    with pytest.raises(ValueError, match="one shape"):
+        tracking_error(desired, actual[:3])
+
+
+def test_pid_terms():
+    pid = PID(kp=2.0, ki=10.0, kd=0.5)
+    torque = pid.torque([1.0], [0.0], np.array([0.0]), np.array([0.4]), dt=0.1)
+    assert torque == pytest.approx([2.0 * 1.0 + 10.0 * 0.1 - 0.5 * 0.4])
+    torque = pid.torque([1.0], [0.0], np.array([0.0]), np.array([0.0]), dt=0.1)
+    assert torque == pytest.approx([2.0 + 10.0 * 0.2])           # the integral accumulates
+    pid.reset()
+    assert pid.torque([1.0], [0.0], np.array([0.0]), np.array([0.0]), 0.1) == pytest.approx([3.0])
+    with pytest.raises(ValueError, match="kd must be finite and >= 0"):
+        PID(1.0, 0.0, -1.0)
+
+
+def test_pid_servo_drives_a_torque_mode_robot_to_position_commands():
+    """At 1 kHz: these light links make a 100 Hz zero-order-hold PID with this Kd unstable."""
+    params = robot("two_link_source")
+    with RobotSimulator(robot_urdf(params), control_mode="torque") as sim:
+        servo = start_servo(sim.step, params.n_joints, PID(kp=40.0, ki=40.0, kd=2.0))
+        target = np.array([0.8, 1.0])
+        for fraction in np.linspace(0.001, 1.0, 500):        # a 0.5 s ramp, then hold 1 s
+            servo.step(fraction * target, 1)
+        for _ in range(1000):
+            state = servo.step(target, 1)
+    assert np.abs(state.positions - target).max() < 0.01
+    assert np.abs(state.efforts).max() <= params.effort_limits.max()
