@@ -36,12 +36,15 @@ class Kinematics:
     """What a babbling program needs to know of a robot.
 
     ``joint_limits`` (n, 2) rad, ``home`` (n,) the pose babbling starts from, ``forward``
-    maps joint vectors (N, n) to task points (N, m).
+    maps joint vectors (N, n) to task points (N, m). ``task_box`` ((low), (high)), if set, is
+    where this robot's task-space babbling happens (robots of different sizes babble in their
+    own boxes, §5.4.1); it replaces the program's ``task_low``/``task_high``.
     """
 
     joint_limits: np.ndarray
     home: np.ndarray
     forward: Callable[[np.ndarray], np.ndarray]
+    task_box: tuple = None
 
     @property
     def n_joints(self):
@@ -68,6 +71,16 @@ def planar_kinematics(robot, home=None):
     return Kinematics(np.array(robot.joint_limits, dtype=np.float64),
                       home_pose(robot.joint_limits, home),
                       lambda q: planar_forward_kinematics(q, lengths))
+
+
+def check_task_box(low, high):
+    """(low, high) as float arrays; ValueError unless finite, low <= high, one length."""
+    low, high = (np.asarray(b, dtype=np.float64) for b in (low, high))
+    if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
+            or not np.isfinite(low).all() or not np.isfinite(high).all() or (low > high).any():
+        raise ValueError(f"task_lines needs finite task_low <= task_high of one length, "
+                         f"got {low.tolist()} and {high.tolist()}")
+    return low, high
 
 
 def robot_kinematics(robot, home=None):
@@ -110,13 +123,8 @@ class BabblingProgram:
             raise ValueError(f"program must be one of {PROGRAMS}, got {self.program!r}")
         check_int(self.n_segments, "n_segments", 1)
         check_int(self.samples_per_segment, "samples_per_segment", 1)
-        if self.program == "task_lines":
-            low, high = (np.asarray(b, dtype=np.float64) for b in (self.task_low, self.task_high))
-            if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
-                    or not np.isfinite(low).all() or not np.isfinite(high).all() \
-                    or (low > high).any():
-                raise ValueError(f"task_lines needs finite task_low <= task_high of one length, "
-                                 f"got {self.task_low} and {self.task_high}")
+        if self.program == "task_lines" and (len(self.task_low) or len(self.task_high)):
+            check_task_box(self.task_low, self.task_high)
 
     @property
     def n_samples(self):
@@ -127,10 +135,12 @@ class BabblingProgram:
         return np.column_stack([np.random.default_rng([self.seed, j]).uniform(
             size=self.n_segments) for j in range(n_joints)])
 
-    def task_waypoints(self):
+    def task_waypoints(self, task_box=None):
+        """(n_segments, m) waypoints uniform in ``task_box`` (default: the program's box); the
+        same seed puts them at the same relative place in any box."""
+        low, high = check_task_box(*(task_box or (self.task_low, self.task_high)))
         rng = np.random.default_rng([self.seed, _TASK_STREAM])
-        return rng.uniform(self.task_low, self.task_high, size=(self.n_segments,
-                                                                len(self.task_low)))
+        return rng.uniform(low, high, size=(self.n_segments, len(low)))
 
     def joint_commands(self, joint_limits, start):
         """The joint-space lines scaled to ``joint_limits`` (n, 2), starting at ``start``."""
@@ -138,12 +148,13 @@ class BabblingProgram:
         waypoints = limits[:, 0] + self.unit_waypoints(len(limits)) * (limits[:, 1] - limits[:, 0])
         return polyline(start, waypoints, self.samples_per_segment)
 
-    def task_points(self, start_point):
+    def task_points(self, start_point, task_box=None):
         """The task-space lines from ``start_point``: (n_samples, m)."""
-        if len(start_point) != len(self.task_low):
-            raise ValueError(f"task_low/task_high have {len(self.task_low)} coordinates but the "
+        waypoints = self.task_waypoints(task_box)
+        if len(start_point) != waypoints.shape[1]:
+            raise ValueError(f"task_low/task_high have {waypoints.shape[1]} coordinates but the "
                              f"robot's task space has {len(start_point)}")
-        return polyline(start_point, self.task_waypoints(), self.samples_per_segment)
+        return polyline(start_point, waypoints, self.samples_per_segment)
 
     def commands(self, kinematics):
         """The robot's joint commands (n_samples, n) for this program."""
@@ -151,5 +162,6 @@ class BabblingProgram:
             return self.joint_commands(kinematics.joint_limits, kinematics.home)
         start = kinematics.forward(kinematics.home[None])[0]
         commands, _ = inverse_kinematics.solve_path(
-            kinematics.forward, self.task_points(start), kinematics.home, kinematics.joint_limits)
+            kinematics.forward, self.task_points(start, kinematics.task_box), kinematics.home,
+            kinematics.joint_limits)
         return commands

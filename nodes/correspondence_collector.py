@@ -24,7 +24,13 @@ Parameters:
 * ``program``: ``joint_lines`` (default) or ``task_lines``; ``n_segments`` (20),
   ``samples_per_segment`` (5), ``steps_per_sample`` (physics steps between samples, 400),
   ``seed`` (0), ``task_low``/``task_high`` (task_lines' waypoint box, m), ``task_offset``
-  (same_task_point: the target's task frame relative to the source's, m).
+  (same_task_point: the target's task frame relative to the source's, m);
+  ``source_task_low``/``source_task_high`` and ``target_task_*``: each robot's own box for
+  task_lines (robots of different sizes babble in their own workspaces, §5.4.1; the same
+  seed puts the waypoints at the same relative places).
+* ``source_pid``, ``target_pid`` (double arrays ``[kp, ki, kd]``, default empty): set for a
+  robot_sim in torque mode; the robot then tracks the babbling commands with this PID
+  (:class:`lpa_transfer.control.PIDServo`), as §5.4.1 collects inverse-dynamics data.
 * ``features`` (string array, default ``[position, ee_x, ee_y]``): the columns of a sample,
   see :mod:`lpa_transfer.correspondences`.
 * ``output``: the ``.npz`` to save the set to (``source``, ``target`` arrays and metadata;
@@ -42,6 +48,7 @@ Topics: ``correspondences`` (CorrespondenceSample, one per pair, header stamp = 
 simulated time) and, when done, ``correspondence_batch`` (CorrespondenceBatch, the whole
 set; transient local, so a late subscriber still gets it).
 """
+import dataclasses
 import os
 import time
 
@@ -53,6 +60,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from lpa_transfer.babbling import BabblingProgram, robot_kinematics
+from lpa_transfer.control import PID, start_servo
 from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
                                           collect_correspondences)
 from lpa_transfer.robot_params import load_robot_params
@@ -72,6 +80,20 @@ def required_path(value, name):
     return os.path.expanduser(value)
 
 
+def task_box(low, high):
+    """A robot's own task-space babbling box, or None (then the program's box is used)."""
+    return (tuple(low), tuple(high)) if low or high else None
+
+
+def pid_of(gains, side):
+    """A PID from ``[kp, ki, kd]`` (the robot is then torque-controlled), or None."""
+    if not gains:
+        return None
+    if len(gains) != 3:
+        raise ValueError(f"{side}_pid must be [kp, ki, kd], got {gains}")
+    return PID(*gains)
+
+
 class CorrespondenceCollector(Node):
     def __init__(self, stop):
         super().__init__("correspondence_collector")
@@ -81,8 +103,11 @@ class CorrespondenceCollector(Node):
         self.robots = {side: load_robot_params(required_path(declare(f"{side}_robot", ""),
                                                              f"{side}_robot"))
                        for side in ("source", "target")}
-        self.kinematics = {side: robot_kinematics(robot, doubles(f"{side}_home") or None)
-                           for side, robot in self.robots.items()}
+        self.kinematics = {side: dataclasses.replace(
+            robot_kinematics(robot, doubles(f"{side}_home") or None),
+            task_box=task_box(doubles(f"{side}_task_low"), doubles(f"{side}_task_high")))
+            for side, robot in self.robots.items()}
+        self.pid = {side: pid_of(doubles(f"{side}_pid"), side) for side in self.robots}
         self.pairing_rule = check_pairing_rule(declare("pairing_rule", "same_command"))
         self.program = BabblingProgram(
             declare("program", "joint_lines"), declare("n_segments", 20),
@@ -119,6 +144,8 @@ class CorrespondenceCollector(Node):
 
     def stepper(self, side):
         step = robot_stepper(self.call, self.step_clients[side], side)
+        if self.pid[side] is not None:          # a torque-mode robot tracking the commands
+            step = start_servo(step, self.robots[side].n_joints, self.pid[side]).step
         if side == "target":
             return step
 

@@ -4,8 +4,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import BabblingProgram, Kinematics, home_pose, planar_kinematics, \
-    polyline
+from lpa_transfer.babbling import (BabblingProgram, Kinematics, home_pose, planar_kinematics,
+                                   polyline, robot_kinematics)
 from lpa_transfer.inverse_kinematics import solve_path
 from lpa_transfer.kinematics import planar_forward_kinematics
 from two_link import elbow_ik, robot
@@ -193,7 +193,6 @@ def test_task_lines_share_waypoints_across_robots_and_are_seeded():
     (dict(n_segments=2.5), "n_segments must be an integer >= 1"),
     (dict(n_segments=True), "n_segments must be an integer >= 1"),
     (dict(samples_per_segment=0), "samples_per_segment must be an integer >= 1, got 0"),
-    (dict(program="task_lines"), "task_lines needs finite task_low <= task_high"),
     (dict(program="task_lines", task_low=(0.5, 0.0), task_high=(0.4, 1.0)),
      "task_lines needs finite task_low <= task_high"),
     (dict(program="task_lines", task_low=(0.0, 0.0), task_high=(1.0, 1.0, 1.0)),
@@ -229,3 +228,28 @@ def test_custom_kinematics_any_forward():
     program = BabblingProgram("task_lines", 4, 3, seed=0, task_low=(-0.4,), task_high=(0.4,))
     commands = program.commands(k)
     np.testing.assert_allclose(0.5 * commands, program.task_points([0.0]), atol=1e-7)
+
+
+def test_task_lines_use_each_robots_own_box():
+    """Boxes of the robots (§5.4.1) replace the program's; without any box it is an error."""
+    program = BabblingProgram("task_lines", 6, 3, seed=4)
+    with pytest.raises(ValueError, match="task_lines needs finite task_low <= task_high"):
+        program.task_waypoints()
+    small, large = ((0.1, 0.1), (0.2, 0.3)), ((0.0, 0.2), (0.4, 0.6))
+    unit_small = (program.task_waypoints(small) - small[0]) / np.subtract(*small[::-1])
+    unit_large = (program.task_waypoints(large) - large[0]) / np.subtract(*large[::-1])
+    np.testing.assert_allclose(unit_small, unit_large)          # same relative places
+    k = dataclasses.replace(robot_kinematics(robot("two_link_target")), task_box=large)
+    points = program.task_points(k.forward(k.home[None])[0], k.task_box)
+    assert ((points[2::3] >= large[0]) & (points[2::3] <= large[1])).all()
+    assert program.commands(k).shape == (18, 2)
+
+
+def test_robot_kinematics_of_a_serial_arm_is_its_3d_forward_kinematics():
+    from lpa_transfer.serial_chain import forward_kinematics
+    youbot = robot("youbot_arm")
+    k = robot_kinematics(youbot)
+    q = np.array([[0.1, 0.2, -0.3, 0.4, 0.5]])
+    np.testing.assert_array_equal(k.forward(q), forward_kinematics(youbot, q))
+    assert k.forward(q).shape == (1, 3)
+    assert robot_kinematics(robot("two_link_source")).forward(q[:, :2]).shape == (1, 2)

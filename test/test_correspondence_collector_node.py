@@ -5,6 +5,7 @@ lock-step graph is deterministic), reach the mapping service as a fitted model, 
 one by one, and survive a recording: the player's replay of the bag, with no simulator
 running, reproduces the same correspondence set and refits the same model.
 """
+import dataclasses
 import signal
 import time
 
@@ -13,6 +14,7 @@ import pytest
 
 from conftest import ROOT
 from lpa_transfer.babbling import BabblingProgram, planar_kinematics
+from lpa_transfer.control import PID, start_servo
 from lpa_transfer.correspondences import collect_correspondences
 from lpa_transfer.model_store import ModelStore
 from lpa_transfer.robot_params import load_robot_params
@@ -190,3 +192,45 @@ def test_bad_parameters_are_a_clear_error(tmp_path):
                             collector_params(pairing_rule="same_colour", wait_timeout=1.0))
     assert run_to_end(collector, timeout=30) == 1
     assert "pairing_rule must be one of" in collector.log()
+
+
+def test_torque_mode_pid_tracking_of_task_lines_equals_the_library(tmp_path):
+    """§5.4.1's collection: both robots track the same task-space lines (each in its own box)
+    with PID torque control; samples (q, q̇, q̈, τ) paired by time index."""
+    boxes = {"source": ((0.2, 0.2), (0.4, 0.4)), "target": ((0.4, 0.3), (0.7, 0.5))}
+    gains = [40.0, 10.0, 2.0]
+    program = BabblingProgram("task_lines", 3, 20, seed=5)
+    features = ["position", "velocity", "acceleration", "effort"]
+    domain_id = unique_domain_id()
+    sims = [NodeProcess("robot_sim", domain_id, tmp_path, name=f"{side}_sim",
+                        args=ros_params(robot=ROBOTS[side], control_mode="torque")
+                        + ["-r", f"__ns:=/{side}"]) for side in ("source", "target")]
+    try:
+        params = dict(source_robot=ROBOTS["source"], target_robot=ROBOTS["target"],
+                      pairing_rule="same_time_index", program="task_lines", n_segments=3,
+                      samples_per_segment=20, seed=5, steps_per_sample=1, wait_timeout=20.0,
+                      features="[" + ",".join(features) + "]", output=tmp_path / "id.npz",
+                      source_pid=str(gains), target_pid=str(gains))
+        for side, (low, high) in boxes.items():
+            params[f"{side}_task_low"], params[f"{side}_task_high"] = str(list(low)), str(list(high))
+        collector = NodeProcess("correspondence_collector", domain_id, tmp_path,
+                                ros_params(**params))
+        assert run_to_end(collector) == 0, collector.log()
+    finally:
+        for sim in sims:
+            sim.stop()
+    robots = {side: load_robot_params(path) for side, path in ROBOTS.items()}
+    kinematics, steps = {}, {}
+    for side, robot in robots.items():
+        kinematics[side] = dataclasses.replace(planar_kinematics(robot), task_box=boxes[side])
+        simulator = RobotSimulator(robot_urdf(robot), control_mode="torque")
+        steps[side] = start_servo(simulator.step, robot.n_joints, PID(*gains)).step
+    expected = collect_correspondences(program, "same_time_index", kinematics["source"],
+                                       kinematics["target"], steps["source"], steps["target"],
+                                       1, features)
+    with np.load(tmp_path / "id.npz") as saved:
+        assert saved["source"].shape == (60, 8)
+        assert np.array_equal(saved["source"], expected.source)
+        assert np.array_equal(saved["target"], expected.target)
+        efforts = saved["target"][:, 6:]
+    assert np.abs(efforts).max() > 0.1            # the PID torques are what was recorded
