@@ -14,6 +14,8 @@ A file is one of two kinds; both load into one :class:`RobotParams`.
     upper = 1.5707963
     effort = 10.0         # N·m, optional, default DEFAULT_EFFORT_LIMIT (100 N·m)
     velocity = 3.0        # rad/s, optional, default DEFAULT_VELOCITY_LIMIT (100 rad/s)
+    armature = 0.0        # kg·m², optional, default 0 (see "Drive" below)
+    damping = 0.0         # N·m·s/rad, optional, default 0
 
 one ``[[joints]]`` table per ``[[links]]`` table (joint i moves link i). The general fields
 below are derived from it (:func:`planar_chain_fields`): joints turn about z, link i is a
@@ -36,6 +38,8 @@ whose gravity points along −y (:func:`lpa_transfer.planar_chain.load_fixed_rob
     upper = 2.93
     effort = 100.0                # N·m
     velocity = 1.5707963          # rad/s
+    armature = 0.225              # kg·m², optional, default 0 (see "Drive" below)
+    damping = 1.0                 # N·m·s/rad, optional, default 0
     [[links]]                     # link i, moved by joint i, in the frame of joint i
     mass = 1.39
     com = [0.01489, 0.00213, 0.00213]
@@ -43,6 +47,14 @@ whose gravity points along −y (:func:`lpa_transfer.planar_chain.load_fixed_rob
     [tool]                        # the end effector, in the frame of the last joint
     xyz = [0.004, 0.0, 0.046]
     rpy = [0.0, 0.0, 0.0]         # optional
+
+Drive (both kinds, optional per joint, default 0, finite and >= 0): ``armature`` is the motor
+rotor's inertia reflected through the gearbox, J_rotor·N² for gear ratio N:1 (kg·m² about the
+joint axis; kg for a prismatic joint), which adds to the joint-space inertia M(q)_ii; ``damping``
+is viscous joint friction, τ = −damping·q̇. Geared joints are dominated by these: the youBot's
+wrist-roll link has 7e-5 kg·m² about its axis, its motor 35 g·cm² × 71² = 0.018 kg·m².
+:func:`lpa_transfer.serial_chain.serial_chain_urdf` writes them into the URDF and
+:class:`lpa_transfer.simulator.RobotSimulator` applies them (its module docstring says how).
 
 Frames compose as in URDF: frame_i = frame_{i-1} · T(xyz_i) · R(rpy_i) · Rot(axis_i, q_i), with
 R(r, p, y) = Rz(y) Ry(p) Rx(r). Inertias are about the centre of mass, axes of the link frame;
@@ -97,6 +109,8 @@ class RobotParams:
     tool_rpy: np.ndarray = None       # (3,) rad
     base_xyz: np.ndarray = None       # (3,) m, first joint frame's parent in the world
     base_rpy: np.ndarray = None       # (3,) rad
+    joint_armature: np.ndarray = None  # (n,) kg·m², reflected rotor inertia; None -> zeros
+    joint_damping: np.ndarray = None   # (n,) N·m·s/rad, viscous joint friction; None -> zeros
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -107,8 +121,14 @@ class RobotParams:
         n = len(self.link_lengths)
         self._set_arrays(dict(link_lengths=np.empty(n), joint_limits=np.empty((n, 2)),
                               link_masses=np.full(n, DEFAULT_LINK_MASS),
-                              effort_limits=np.full(n, DEFAULT_EFFORT_LIMIT)))
+                              effort_limits=np.full(n, DEFAULT_EFFORT_LIMIT),
+                              joint_armature=np.zeros(n), joint_damping=np.zeros(n)))
         self._set_arrays(planar_chain_fields(self.link_lengths, self.link_masses))
+        for field in ("joint_armature", "joint_damping"):
+            values = getattr(self, field)
+            if not (np.isfinite(values).all() and (values >= 0).all()):
+                raise ValueError(f"RobotParams {self.name!r}: {field} must be finite and >= 0, "
+                                 f"got {values.tolist()}")
 
     def _set_arrays(self, defaults):
         """Store each field as a read-only float array shaped as its default (used if None)."""
@@ -156,6 +176,16 @@ def _number(table, key, where):
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
         raise ValueError(f"{where}: key '{key}' must be a finite number, got {value!r}")
     return float(value)
+
+
+def _non_negative(table, key, where):
+    """An optional value >= 0 (default 0): a joint's ``armature`` or ``damping``."""
+    if key not in table:
+        return 0.0
+    value = _number(table, key, where)
+    if value < 0:
+        raise ValueError(f"{where}: key '{key}' must be >= 0, got {value}")
+    return value
 
 
 def _positive(table, key, where, default=None):
@@ -249,7 +279,14 @@ def _planar_fields(data, path):
                 effort_limits=[_positive(j, "effort", w, DEFAULT_EFFORT_LIMIT)
                                for j, w in zip(joints, wheres)],
                 velocity_limits=[_positive(j, "velocity", w, DEFAULT_VELOCITY_LIMIT)
-                                 for j, w in zip(joints, wheres)])
+                                 for j, w in zip(joints, wheres)],
+                **_drive_fields(joints, wheres))
+
+
+def _drive_fields(joints, wheres):
+    """The optional ``armature`` and ``damping`` of each joint (module docstring, "Drive")."""
+    return dict(joint_armature=[_non_negative(j, "armature", w) for j, w in zip(joints, wheres)],
+                joint_damping=[_non_negative(j, "damping", w) for j, w in zip(joints, wheres)])
 
 
 def _serial_fields(data, path):
@@ -277,6 +314,7 @@ def _serial_fields(data, path):
     fields["tool_rpy"] = _vector(tool, "rpy", f"{path}: tool", default=np.zeros(3))
     fields["base_xyz"] = _vector(base, "xyz", f"{path}: base", default=np.zeros(3))
     fields["base_rpy"] = _vector(base, "rpy", f"{path}: base", default=np.zeros(3))
+    fields.update(_drive_fields(joints, [f"{path}: joints[{i}]" for i in range(len(joints))]))
     offsets = np.vstack((fields["joint_xyz"][1:], [fields["tool_xyz"]]))
     fields["link_lengths"] = np.linalg.norm(offsets, axis=1)
     return fields

@@ -9,7 +9,16 @@ is the simulator's, gravity −9.81 m/s² along −y
 B the base placement, R(r, p, y) = Rz(y) Ry(p) Rx(r), Rot by Rodrigues' formula. This
 T_tool is the forward kinematics the chapter 5 tasks are tracked in (§5.5.1: the robots
 track 'star' figures with their end effectors). Pure numpy; pybullet only reads the URDF.
+
+Joint drives (:mod:`lpa_transfer.robot_params`, "Drive"): the viscous ``damping`` goes into the
+standard ``<dynamics damping=...>``, which pybullet reads. URDF has no reflected rotor inertia,
+so a joint's ``armature`` is written as an extension element ``<lpa:armature value="..."/>``
+(namespace :data:`LPA_URDF_NAMESPACE`) inside ``<joint>``, which URDF parsers, pybullet's
+included, ignore; :class:`lpa_transfer.simulator.RobotSimulator` reads it back with
+:func:`urdf_joint_armatures` and applies both (its module docstring says how).
 """
+import xml.etree.ElementTree as ElementTree
+
 import numpy as np
 
 from ._validation import as_matrix
@@ -66,6 +75,43 @@ def forward_kinematics(robot, q):
     return tool_transforms(robot, q)[:, :3, 3]
 
 
+#: XML namespace of this project's URDF extension elements (``<lpa:armature>``).
+LPA_URDF_NAMESPACE = "urn:lpa-transfer:urdf"
+
+
+def urdf_joint_armatures(urdf_text):
+    """{joint name: armature} of the joints that carry an ``<lpa:armature value="..."/>``.
+
+    ``urdf_text`` is URDF text (not a path). Text without the extension is not parsed (any
+    URDF a user brings works as before); text with it must be valid XML and every value a
+    finite number >= 0, else ValueError.
+    """
+    if LPA_URDF_NAMESPACE not in urdf_text:
+        if "lpa:armature" in urdf_text:
+            raise ValueError(f"URDF has lpa:armature elements but does not declare their "
+                             f'namespace: add xmlns:lpa="{LPA_URDF_NAMESPACE}" to <robot>')
+        return {}
+    try:
+        root = ElementTree.fromstring(urdf_text)
+    except ElementTree.ParseError as exc:
+        raise ValueError(f"URDF with lpa:armature elements is not valid XML: {exc}") from None
+    armatures = {}
+    for joint in root.iter("joint"):
+        element = joint.find(f"{{{LPA_URDF_NAMESPACE}}}armature")
+        if element is None:
+            continue
+        name = joint.get("name")
+        try:
+            value = float(element.get("value"))
+        except (TypeError, ValueError):
+            value = float("nan")
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"URDF joint {name!r}: lpa:armature value must be a finite number "
+                             f">= 0, got {element.get('value')!r}")
+        armatures[name] = value
+    return armatures
+
+
 def _numbers(values):
     return " ".join(f"{v:.17g}" for v in values)
 
@@ -83,11 +129,14 @@ def serial_chain_urdf(robot):
     Links ``base`` (massless; the world frame), ``link1..linkn`` on revolute joints
     ``joint1..jointn``, a massless ``tool`` on the fixed ``tool_joint`` — the names of
     :func:`lpa_transfer.planar_chain.planar_chain_urdf`. The base placement is folded into
-    joint1's origin, so the simulator's last link is the tool. Joint damping and friction
-    are zero; pybullet enforces neither effort nor velocity limits.
+    joint1's origin, so the simulator's last link is the tool. Joint damping is the file's
+    (default 0), friction zero; a non-zero armature becomes an ``<lpa:armature>`` element
+    (module docstring). pybullet enforces neither effort nor velocity limits.
     """
     massless = _inertial(0.0, np.zeros(3), np.zeros((3, 3)))
-    parts = [f'<?xml version="1.0"?>\n<robot name="{robot.name}">\n'
+    namespace = (f' xmlns:lpa="{LPA_URDF_NAMESPACE}"' if (robot.joint_armature > 0).any()
+                 else "")
+    parts = [f'<?xml version="1.0"?>\n<robot name="{robot.name}"{namespace}>\n'
              f'  <link name="base">{massless}</link>']
     first = _transform(robot.base_xyz, robot.base_rpy) @ _transform(robot.joint_xyz[0],
                                                                      robot.joint_rpy[0])
@@ -96,6 +145,8 @@ def serial_chain_urdf(robot):
         xyz, rpy = ((first[:3, 3], matrix_rpy(first[:3, :3])) if i == 0
                     else (robot.joint_xyz[i], robot.joint_rpy[i]))
         (lower, upper), child = robot.joint_limits[i], f"link{i + 1}"
+        armature = (f'    <lpa:armature value="{robot.joint_armature[i]:.17g}"/>\n'
+                    if robot.joint_armature[i] > 0 else "")
         parts.append(
             f'  <link name="{child}">'
             f'{_inertial(robot.link_masses[i], robot.link_coms[i], robot.link_inertias[i])}'
@@ -106,7 +157,8 @@ def serial_chain_urdf(robot):
             f'<axis xyz="{_numbers(robot.joint_axes[i])}"/>\n'
             f'    <limit lower="{lower:.17g}" upper="{upper:.17g}" '
             f'effort="{robot.effort_limits[i]:.17g}" velocity="{robot.velocity_limits[i]:.17g}"/>\n'
-            f'    <dynamics damping="0" friction="0"/>\n'
+            f'    <dynamics damping="{robot.joint_damping[i]:.17g}" friction="0"/>\n'
+            f'{armature}'
             f'  </joint>')
         parent = child
     parts.append(f'  <link name="tool">{massless}</link>\n'

@@ -16,15 +16,48 @@ Control modes (``step`` takes one command per movable joint, in ``joint_names`` 
   physics step (pybullet clears applied torques after each step).
 
 pybullet's artificial link damping (linear/angular 0.04 by default) is set to 0, so the
-dynamics are the URDF's (the planar chains have zero joint damping and friction). There is
-nothing random in the simulation: the same inputs give the same outputs, bit for bit.
+dynamics are the URDF's. There is nothing random in the simulation: the same inputs give the
+same outputs, bit for bit.
+
+Joint drives (:mod:`lpa_transfer.robot_params`, "Drive"):
+
+* viscous damping D, URDF ``<dynamics damping=D>`` (``joint_damping``): pybullet applies
+  τ = −D·q̇ itself in every control mode, explicitly, from the velocity at the start of the
+  physics step — measured: a free joint at q̇ = 2 rad/s with D = 0.5 N·m·s/rad and 0.05 kg·m²
+  loses 0.02 rad/s per 1 ms step, without damping none. Explicit damping diverges once
+  D·dt > 2·(the joint's inertia): the youBot's wrist roll (7e-5 kg·m², D = 1) without its
+  armature ran away to pybullet's 100 rad/s clamp within 10 ms. So in torque mode the
+  simulator switches pybullet's damping off and applies it itself, implicitly (below);
+  position mode keeps pybullet's (its motor constraints hold the joints);
+* armature A (``<lpa:armature>``, :func:`lpa_transfer.serial_chain.urdf_joint_armatures`;
+  ``armature``): pybullet has no armature parameter. In torque mode, when a joint has an
+  armature or damping, the simulator makes the arm move as
+
+      (M(q) + diag(A)) q̈ + h(q, q̇) + D q̇⁺ = τ,   q̇⁺ = q̇ + dt·q̈ (the velocity after the step):
+
+  at every physics step it reads M (``calculateMassMatrix``) and h = Coriolis + gravity
+  (``calculateInverseDynamics`` at q̈ = 0) of the current state and applies τ' = M q̈* + h with
+  q̈* = (M + diag(A + D·dt))⁻¹ (τ − D q̇ − h), so pybullet's own step (M q̈ = τ' − h) produces
+  exactly q̈*. This is the usual rotor model of manipulator dynamics (reflected inertia
+  J_rotor·N² on the diagonal of M); what it leaves out is the spinning rotor's coupling to
+  the joints before it, J_rotor·N and J_rotor, i.e. 1/N and 1/N² of A (1.4 % at the youBot's
+  wrist, N = 71; 0.4 % at the AX-12A's 254). The obvious alternative, adding A about the
+  joint axis to the child link's inertia in the URDF, was measured and rejected: I + A·aaᵀ
+  breaks the rigid-body triangle inequality, and pybullet then sets the link's inertia to
+  zero; a disc-shaped addition (A about the axis, A/2 across it) loads, but pybullet then
+  also adds A to every joint before it with a parallel axis and to the coupling terms
+  (youBot file at q = (0, 0.5, 0.8, 0.5, 0): M_11 grew by 0.47 instead of 0.23 kg·m², M_22 by
+  0.48 instead of 0.33, M_23 by 0.15 instead of 0). Joint-limit and contact impulses still
+  see M alone. The reported efforts are the commanded (clipped) τ. Position mode uses
+  pybullet's motor constraints, which do not see the armature (damping still applies there).
 """
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from lpa_transfer.planar_chain import load_fixed_robot
-from lpa_transfer.serial_chain import serial_chain_urdf
+from lpa_transfer.serial_chain import serial_chain_urdf, urdf_joint_armatures
 
 CONTROL_MODES = ("position", "torque")
 
@@ -33,7 +66,8 @@ def robot_urdf(robot):
     """URDF text of a :class:`lpa_transfer.robot_params.RobotParams` chain, planar or serial.
 
     :func:`lpa_transfer.serial_chain.serial_chain_urdf`: the file's masses, centres of mass,
-    inertias, limits (a planar file's derived ones: the rods of ``planar_chain_urdf``).
+    inertias, limits, joint damping and armature (a planar file's derived ones: the rods of
+    ``planar_chain_urdf``).
     """
     return serial_chain_urdf(robot)
 
@@ -63,6 +97,9 @@ class RobotSimulator:
     default 0.1 lets an arm whose effort limit saturates fall into a limit cycle: measured on
     the §3.6 target arm (1 ms steps), joint 1 still swung ±3 rad/s at ±20 N·m one second after
     6 of 100 random targets. At 0.05 all 100 settled within 1e-4 rad.
+
+    ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
+    (module docstring); the armature acts in torque mode.
     """
 
     def __init__(self, urdf, control_mode="position", physics_step=1e-3,
@@ -111,15 +148,46 @@ class RobotSimulator:
             raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
                              f"(<limit effort=...>); the simulator needs one to clip commands")
         self._ee_link = n_all - 1
+        self.joint_damping = np.array([info[6] for info in movable], dtype=float)
+        self.armature = self._armatures(urdf)
         for link in range(-1, n_all):
             p.changeDynamics(self._body, link, linearDamping=0.0, angularDamping=0.0,
                              physicsClientId=cid)
-        for array in (self.joint_limits, self.effort_limits):
+        for array in (self.joint_limits, self.effort_limits, self.joint_damping, self.armature):
             array.setflags(write=False)
+        self._drives = self.control_mode == "torque" and (
+            (self.armature > 0).any() or (self.joint_damping > 0).any())
+        if self._drives:   # damping implicitly in _drive_torques instead (module docstring)
+            for joint in self._joints:
+                p.changeDynamics(self._body, joint, jointDamping=0.0, physicsClientId=cid)
         if self.control_mode == "torque":
             p.setJointMotorControlArray(self._body, self._joints, p.VELOCITY_CONTROL,
                                         targetVelocities=[0.0] * self.n_joints,
                                         forces=[0.0] * self.n_joints, physicsClientId=cid)
+
+    def _armatures(self, urdf):
+        """Armature per movable joint from the URDF's ``<lpa:armature>`` elements (default 0)."""
+        text = str(urdf)
+        if not text.lstrip().startswith("<"):
+            text = Path(text).read_text()
+        armatures = urdf_joint_armatures(text)
+        unknown = set(armatures) - set(self.joint_names)
+        if unknown:
+            raise ValueError(f"lpa:armature on joints {sorted(unknown)}, which are not movable "
+                             f"joints of the robot ({', '.join(self.joint_names)})")
+        return np.array([armatures.get(name, 0.0) for name in self.joint_names])
+
+    def _drive_torques(self, torques):
+        """τ' that makes pybullet's step follow (M + diag A) q̈ + h + D q̇⁺ = τ (module doc)."""
+        p, cid, body = self._p, self._client, self._body
+        states = p.getJointStates(body, self._joints, physicsClientId=cid)
+        q, qd = [s[0] for s in states], [s[1] for s in states]
+        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
+        bias = np.array(p.calculateInverseDynamics(body, q, qd, [0.0] * self.n_joints,
+                                                   physicsClientId=cid))
+        drive = np.diag(self.armature + self.joint_damping * self.physics_step)
+        accel = np.linalg.solve(mass + drive, torques - self.joint_damping * np.asarray(qd) - bias)
+        return mass @ accel + bias
 
     @property
     def n_joints(self):
@@ -184,8 +252,9 @@ class RobotSimulator:
         else:
             torques = np.clip(command, -self.effort_limits, self.effort_limits)
             for _ in range(n_substeps):
+                applied = self._drive_torques(torques) if self._drives else torques
                 p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL,
-                                            forces=torques.tolist(), physicsClientId=cid)
+                                            forces=applied.tolist(), physicsClientId=cid)
                 p.stepSimulation(physicsClientId=cid)
             self._efforts = torques
         self._steps += n_substeps

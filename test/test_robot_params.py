@@ -191,3 +191,76 @@ def test_direct_construction_checks_shapes():
         RobotParams("arm", [0.3, 0.2], [(0, 1), (0, 1)], "test", joint_axes=[[0, 0, 1]])
     with pytest.raises(ValueError, match="kind must be one of"):
         RobotParams("arm", [0.3], [(0, 1)], "test", kind="spherical")
+
+
+# -- joint drives: armature and damping (both kinds) ---------------------------------------
+def test_armature_and_damping_are_optional_and_stored(tmp_path):
+    robot = load_robot_params(write(tmp_path, SERIAL))
+    np.testing.assert_array_equal(robot.joint_armature, [0, 0])   # default: no drive model
+    np.testing.assert_array_equal(robot.joint_damping, [0, 0])
+    driven = load_robot_params(write(tmp_path, SERIAL.replace(
+        "velocity = 3.0", "velocity = 3.0\narmature = 0.05\ndamping = 1.5")))
+    np.testing.assert_array_equal(driven.joint_armature, [0, 0.05])
+    np.testing.assert_array_equal(driven.joint_damping, [0, 1.5])
+    planar = load_robot_params(write(tmp_path, VALID.replace(
+        "upper = 1.0\n[[joints]]", "upper = 1.0\narmature = 0.2\ndamping = 0\n[[joints]]")))
+    np.testing.assert_array_equal(planar.joint_armature, [0.2, 0])
+    np.testing.assert_array_equal(planar.joint_damping, [0, 0])
+    with pytest.raises(ValueError):
+        driven.joint_armature[0] = 1.0   # read-only
+
+
+@pytest.mark.parametrize("text, old, new, message", [
+    ("serial", "velocity = 3.0", "velocity = 3.0\narmature = -0.1",
+     r"joints\[1\]: key 'armature' must be >= 0, got -0.1"),
+    ("serial", "velocity = 2.0", "velocity = 2.0\ndamping = -1",
+     r"joints\[0\]: key 'damping' must be >= 0, got -1.0"),
+    ("serial", "velocity = 2.0", "velocity = 2.0\narmature = inf",
+     r"joints\[0\]: key 'armature' must be a finite number, got inf"),
+    ("serial", "velocity = 2.0", 'velocity = 2.0\ndamping = "viscous"',
+     r"joints\[0\]: key 'damping' must be a finite number"),
+    ("planar", "upper = 1.0\n[[joints]]", "upper = 1.0\ndamping = nan\n[[joints]]",
+     r"joints\[0\]: key 'damping' must be a finite number, got nan"),
+    ("planar", "lower = -1.0", "lower = -1.0\narmature = -2",
+     r"joints\[1\]: key 'armature' must be >= 0"),
+])
+def test_bad_armature_or_damping_names_file_and_key(tmp_path, text, old, new, message):
+    base = SERIAL if text == "serial" else VALID
+    assert old in base
+    path = write(tmp_path, base.replace(old, new, 1))
+    with pytest.raises(ValueError, match=message) as info:
+        load_robot_params(path)
+    assert str(path) in str(info.value)
+
+
+def test_direct_construction_checks_armature_and_damping():
+    from lpa_transfer.robot_params import RobotParams
+
+    args = ("arm", [0.3, 0.2], [(0, 1), (0, 1)], "test")
+    assert RobotParams(*args, joint_armature=[0.1, 0.0]).joint_armature.tolist() == [0.1, 0.0]
+    with pytest.raises(ValueError, match=r"joint_armature must be finite and >= 0"):
+        RobotParams(*args, joint_armature=[0.1, -0.1])
+    with pytest.raises(ValueError, match=r"joint_damping must be finite and >= 0"):
+        RobotParams(*args, joint_damping=[np.nan, 0.0])
+    with pytest.raises(ValueError, match=r"joint_damping must have shape \(2,\)"):
+        RobotParams(*args, joint_damping=[1.0])
+
+
+def test_chapter_5_drives_are_the_sourced_ones():
+    """armature = rotor inertia x gear ratio² (the files' comments give the sources)."""
+    youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
+    rotor = np.array([92.5, 135.0, 92.5, 92.5, 35.0]) * 1e-7          # g·cm² -> kg·m², maxon
+    ratio = np.array([156, 156, 100, 71, 71])                          # youbot_driver config
+    np.testing.assert_allclose(youbot.joint_armature, rotor * ratio ** 2, rtol=1e-12)
+    np.testing.assert_array_equal(youbot.joint_damping, 1.0)            # youbot_description
+    pincher = load_robot_params(ROBOTS / "pincher_arm.toml")
+    # assumed: >= tau_m (10 ms) x stall torque / no-load speed of the AX-12A
+    np.testing.assert_allclose(pincher.joint_armature, 0.010 * 1.5 / (59 * 2 * np.pi / 60),
+                               rtol=0.02)
+    np.testing.assert_array_equal(pincher.joint_damping, 0.0)
+    for stem, n in (("two_link_arm", 2), ("three_dof_arm", 3)):
+        np.testing.assert_allclose(load_robot_params(ROBOTS / f"{stem}.toml").joint_armature,
+                                   [92.5e-7 * 156 ** 2] * n, rtol=1e-12)
+    for stem in ("two_link_source", "two_link_target"):   # Table 3.1 robots: no drives
+        table = load_robot_params(ROBOTS / f"{stem}.toml")
+        assert not table.joint_armature.any() and not table.joint_damping.any()

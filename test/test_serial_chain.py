@@ -10,7 +10,7 @@ from lpa_transfer.kinematics import planar_forward_kinematics  # noqa: E402
 from lpa_transfer.planar_chain import inverse_dynamics, load_fixed_robot  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer.serial_chain import (forward_kinematics, matrix_rpy, rpy_matrix,  # noqa: E402
-                                       serial_chain_urdf)
+                                       serial_chain_urdf, urdf_joint_armatures)
 from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
 
 ROBOTS = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
@@ -128,6 +128,9 @@ def test_chapter_5_robot_files_load_into_the_simulator(stem):
         np.testing.assert_allclose(sim.state().end_effector,
                                    forward_kinematics(arm, np.zeros((1, n_joints)))[0],
                                    atol=LINK_STATE_ATOL)
+        np.testing.assert_array_equal(sim.armature, arm.joint_armature)      # via the URDF
+        np.testing.assert_array_equal(sim.joint_damping, arm.joint_damping)
+        assert sim.armature.all()   # every chapter 5 joint is a geared drive
 
 
 @pytest.mark.parametrize("stem", [*CHAPTER_5, "general"])
@@ -199,3 +202,42 @@ def test_forward_kinematics_rejects_bad_joint_arrays():
         forward_kinematics(arm, np.zeros((3, 5)))
     with pytest.raises(ValueError, match="NaN"):
         forward_kinematics(arm, [[0.0, np.nan, 0.0, 0.0]])
+
+
+def test_urdf_carries_the_joint_drives(tmp_path):
+    """damping -> <dynamics damping> (pybullet reads it), armature -> <lpa:armature>."""
+    import dataclasses
+
+    arm = robot("youbot_arm")
+    urdf = serial_chain_urdf(arm)
+    assert urdf_joint_armatures(urdf) == {f"joint{i + 1}": a
+                                          for i, a in enumerate(arm.joint_armature)}
+    client = p.connect(p.DIRECT)
+    try:
+        body = load_fixed_robot(p, urdf, client)   # the extension does not disturb pybullet
+        assert [p.getJointInfo(body, j, physicsClientId=client)[6]
+                for j in range(arm.n_joints)] == arm.joint_damping.tolist()
+    finally:
+        p.disconnect(client)
+    plain = dataclasses.replace(arm, joint_armature=np.zeros(5), joint_damping=np.zeros(5))
+    assert "lpa:" not in serial_chain_urdf(plain)    # as before drives existed
+    assert urdf_joint_armatures(serial_chain_urdf(plain)) == {}
+    partial = dataclasses.replace(arm, joint_armature=[0, 0.5, 0, 0, 0])
+    assert urdf_joint_armatures(serial_chain_urdf(partial)) == {"joint2": 0.5}
+
+
+@pytest.mark.parametrize("value, message", [('"-1"', "must be a finite number >= 0"),
+                                            ('"nan"', "must be a finite number >= 0"),
+                                            ('"heavy"', "must be a finite number >= 0")])
+def test_urdf_armature_values_are_checked(value, message):
+    import re
+
+    urdf = re.sub(r'armature value="[^"]*"', f"armature value={value}",
+                  serial_chain_urdf(robot("pincher_arm")), count=1)
+    with pytest.raises(ValueError, match=f"joint1.*{message}"):
+        urdf_joint_armatures(urdf)
+    with pytest.raises(ValueError, match="not valid XML"):
+        urdf_joint_armatures(serial_chain_urdf(robot("pincher_arm")).replace("</robot>", ""))
+    undeclared = re.sub(r' xmlns:lpa="[^"]*"', "", serial_chain_urdf(robot("pincher_arm")))
+    with pytest.raises(ValueError, match="does not declare their namespace"):
+        urdf_joint_armatures(undeclared)
