@@ -207,9 +207,10 @@ class RobotSimulator:
         return array
 
     # -- public API -------------------------------------------------------------------------
-    def reset(self, positions=None):
+    def reset(self, positions=None, keep_time=False):
         """Put the joints at ``positions`` (default: zero clipped into the limits), at rest,
-        and the clock at 0; in position mode the motors then hold that pose."""
+        and the clock at 0 (unless ``keep_time``: then it runs on, so that the stamps of
+        what is published stay ordered); in position mode the motors then hold that pose."""
         if positions is None or len(positions) == 0:
             q = np.clip(np.zeros(self.n_joints), self.joint_limits[:, 0], self.joint_limits[:, 1])
         else:
@@ -221,7 +222,8 @@ class RobotSimulator:
         p, cid = self._p, self._client
         for joint, value in zip(self._joints, q):
             p.resetJointState(self._body, joint, float(value), 0.0, physicsClientId=cid)
-        self._steps, self._efforts = 0, np.zeros(self.n_joints)
+        self._steps = self._steps if keep_time else 0
+        self._efforts = np.zeros(self.n_joints)
         if self.control_mode == "position":
             self._position_motors(q)
         return self.state()

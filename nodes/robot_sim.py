@@ -17,7 +17,8 @@ Parameters:
 * ``lockstep`` (bool, default true).
 
 Lock-step mode (default): the service ``~/step`` (lpa_transfer_interfaces/srv/StepRobot)
-applies a command, advances ``n_steps`` physics steps and answers with the new state. Why:
+applies a command, advances ``n_steps`` physics steps and answers with the new state;
+``~/reset`` (ResetRobot) puts the robot at rest at a pose (the clock runs on). Why:
 the experiments (babbling, demonstrations, evaluating transferred models) should run faster
 than real time and give the same numbers on every run. When the caller advances the
 simulation, nothing depends on timers, CPU load or DDS latency: the same sequence of
@@ -48,7 +49,7 @@ from std_msgs.msg import Float64MultiArray
 
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer_interfaces.srv import StepRobot
+from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import (answering, array_parameter, init_with_stop_event,
                                           sim_stamp, spin_until_stopped)
 
@@ -76,6 +77,7 @@ class RobotSim(Node):
             description = robot_urdf(load_robot_params(os.path.expanduser(robot)))
         else:
             description = os.path.expanduser(urdf)
+        self.initial = initial
         self.sim = RobotSimulator(description, control_mode=control_mode,
                                   physics_step=physics_step, initial_positions=initial,
                                   seed=seed, position_gain=position_gain)
@@ -84,6 +86,8 @@ class RobotSim(Node):
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
+            self.create_service(ResetRobot, "~/reset", answering(self, "reset",
+                                                                 self.reset_service))
         else:
             if not (math.isfinite(control_rate) and control_rate > 0):
                 raise ValueError(f"control_rate must be a positive number of Hz, "
@@ -124,6 +128,12 @@ class RobotSim(Node):
         response.joint_state, response.end_effector = self.publish(state)
         response.sim_time = state.time
         return f"advanced {max(1, request.n_steps)} step(s) to t={state.time:.6f} s"
+
+    def reset_service(self, request, response):
+        response.sim_time = self.sim.time
+        state = self.sim.reset(list(request.positions) or self.initial, keep_time=True)
+        response.joint_state, response.end_effector = self.publish(state)
+        return f"reset to {[round(float(q), 6) for q in state.positions]} at t={state.time:.6f} s"
 
     def on_command(self, msg):
         command = list(msg.data)

@@ -140,6 +140,26 @@ def test_free_running_mode_follows_joint_commands(tmp_path):
             client.close()
 
 
+def test_reset_puts_the_robot_at_rest_and_the_clock_runs_on(sim):
+    from lpa_transfer_interfaces.srv import ResetRobot
+
+    node, client = sim
+    reset = client.node.create_client(ResetRobot, "/robot_sim/reset")
+    moved = client.step([1.0, 2.0], 300)
+    answer = client.call(reset, ResetRobot.Request(positions=[0.5, 0.25]))
+    assert answer.success, answer.message
+    assert list(answer.joint_state.position) == pytest.approx([0.5, 0.25])
+    assert list(answer.joint_state.velocity) == [0.0, 0.0]
+    assert answer.sim_time == pytest.approx(moved.sim_time)
+    x, y = planar_forward_kinematics(np.array([[0.5, 0.25]]), LENGTHS)[0]
+    assert (answer.end_effector.x, answer.end_effector.y) == pytest.approx((x, y), abs=1e-6)
+    bad = client.call(reset, ResetRobot.Request(positions=[0.5, 9.0]))
+    assert not bad.success and "outside the joint limits" in bad.message
+    home = client.call(reset, ResetRobot.Request())          # empty: the initial pose
+    assert home.success and list(home.joint_state.position) == pytest.approx([0.0, 0.0])
+    assert client.step([0.0, 0.0], 1).success
+
+
 def test_sigint_exits_cleanly(sim):
     node, client = sim
     client.step([0.5, 0.5], 1)
