@@ -1,0 +1,191 @@
+"""inverse_dynamics_learner: online inverse-dynamics learning for torque tracking (thesis ch. 5).
+
+Run (next to a robot_sim in torque mode, lock-step, in the same namespace):
+``inverse_dynamics_learner --ros-args -r __ns:=/pincher -p robot:=scenarios/robots/pincher_arm.toml
+-p centre_pose:=[0.0,0.6,0.9,0.6] -p star_radius:=0.05 -p pid:=[5.0,0.01,0.1]``.
+
+The node runs the control loop of Fig. 5-1 (:class:`lpa_transfer.online_learning.FeedForwardLearner`)
+on its robot through the robot's StepRobot service: at every control period the learned
+feed-forward torque τ_ff(q_d, q̇_d, q̈_d) plus PID feedback, then one online update from the
+observed (q, q̇, q̈, τ). The task is a 'star' (§5.5.1, :mod:`lpa_transfer.tasks`) around the
+end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
+
+Parameters:
+
+* ``robot``: the robot parameter file; ``step_service`` (default ``robot_sim/step``,
+  resolved in the node's namespace).
+* ``control_rate`` (Hz, 100; up to 1000) and ``physics_step`` (s, 0.001, the simulator's):
+  each control period advances round(1 / (control_rate · physics_step)) physics steps.
+* ``pid``: ``[kp, ki, kd]`` (thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0]).
+* ``centre_pose`` (joint angles): the star's centre is this pose's end-effector position,
+  and trials start from it (give the robot_sim the same ``initial_positions``);
+  ``star_u``, ``star_v`` (the star's plane, default world x and y), ``star_radius`` (m),
+  ``star_spread`` (rad, 2π), ``star_start_angle`` (rad, 0).
+* ``regressor`` (``lwpr``) and ``regressor_params`` (JSON object of its hyperparameters,
+  e.g. ``{"init_D": 30, "init_alpha": 1.1}``): the online learner is a parameter. LWPR's
+  ``norm_in`` defaults to the spread of the task's desired states
+  (:func:`lpa_transfer.online_learning.input_scale`).
+* ``call_timeout`` (s, 30) for each robot step; ``wait_timeout`` (s, 30) for the robot.
+
+Services: ``~/initialise`` (InitialiseLearner: learn offline from (q, q̇, q̈, τ) samples,
+optionally after a reset) and ``~/run_trials`` (RunTrials: run trials, answer their errors and
+the experience). Topic: ``trial_result`` (TrialResult, one per trial, with the desired and
+actual end-effector paths). Bad samples (NaN/inf) are rejected and counted, never learned.
+"""
+import json
+import os
+
+import numpy as np
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from lpa_transfer.babbling import robot_kinematics
+from lpa_transfer.control import PID
+from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.tasks import joint_trajectory, star_trajectory
+from lpa_transfer_interfaces.msg import TrialResult
+from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials, StepRobot
+from lpa_transfer_nodes._ros_util import (answering, array_parameter, call_service, from_matrix,
+                                          init_with_stop_event, robot_stepper, sim_stamp,
+                                          spin_until_stopped, to_matrix, wait_for_services)
+
+
+class InverseDynamicsLearner(Node):
+    def __init__(self, stop):
+        super().__init__("inverse_dynamics_learner")
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        doubles = lambda name: array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)  # noqa: E731,E501
+        self.stop = stop
+        self.robot = load_robot_params(os.path.expanduser(declare("robot", "")))
+        control_rate = float(declare("control_rate", 100.0))
+        physics_step = float(declare("physics_step", 0.001))
+        if not 0 < control_rate <= 1.0 / physics_step:
+            raise ValueError(f"control_rate must be in (0, {1 / physics_step:g}] Hz, "
+                             f"got {control_rate}")
+        self.dt = 1.0 / control_rate
+        self.n_steps = max(1, round(self.dt / physics_step))
+        gains = doubles("pid")
+        if len(gains) != 3:
+            raise ValueError(f"pid must be [kp, ki, kd], got {gains}")
+        self.trajectory = self.task(doubles)
+        self.regressor_spec = (declare("regressor", "lwpr"),
+                               json.loads(declare("regressor_params", "{}")))
+        if self.regressor_spec[0] == "lwpr":
+            self.regressor_spec[1].setdefault("norm_in", input_scale(*self.trajectory[:3]))
+        self.learner = FeedForwardLearner(make_regressor(self.regressor_spec[0],
+                                                         **self.regressor_spec[1]), PID(*gains))
+        self.call_timeout = float(declare("call_timeout", 30.0))
+        self.wait_timeout = float(declare("wait_timeout", 30.0))
+        # Robot calls happen inside service callbacks: a client node of their own, spun by
+        # its own executor, so the callback never re-enters this node's executor.
+        self.robot_node = rclpy.create_node("inverse_dynamics_learner_robot_client",
+                                            namespace=self.get_namespace())
+        self.robot_spinner = SingleThreadedExecutor()
+        self.robot_spinner.add_node(self.robot_node)
+        self.step_client = self.robot_node.create_client(
+            StepRobot, declare("step_service", "robot_sim/step"))
+        self.step = robot_stepper(self.call, self.step_client, self.robot.name)
+        self.state, self.trial = None, 0
+        self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
+        self.create_service(InitialiseLearner, "~/initialise",
+                            answering(self, "initialise", self.initialise))
+        self.create_service(RunTrials, "~/run_trials", answering(self, "run_trials",
+                                                                 self.run_trials))
+        self.get_logger().info(
+            f"{self.robot.name}: star of {len(self.trajectory[0])} periods at "
+            f"{control_rate:g} Hz ({self.n_steps} physics steps each), "
+            f"regressor {self.regressor_spec[0]}")
+
+    def task(self, doubles):
+        """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
+        kinematics = robot_kinematics(self.robot, doubles("centre_pose") or None)
+        centre = kinematics.forward(kinematics.home[None])[0]
+        dims = len(centre)
+        u = doubles("star_u") or [1.0, 0.0, 0.0][:dims]
+        v = doubles("star_v") or [0.0, 1.0, 0.0][:dims]
+        x_d = star_trajectory(centre, u, v, self.declare_parameter("star_radius", 0.05).value,
+                              self.dt, spread=self.declare_parameter("star_spread",
+                                                                     2 * np.pi).value,
+                              start_angle=self.declare_parameter("star_start_angle", 0.0).value)
+        q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack((centre, x_d)),
+                                                 kinematics.home, self.dt)
+        if residuals.max() > 1e-3:
+            raise ValueError(f"the star leaves the robot's workspace: inverse kinematics misses "
+                             f"it by up to {residuals.max():.4f} m (move centre_pose inwards "
+                             f"or shrink star_radius)")
+        return q[1:], qd[1:], qdd[1:], x_d
+
+    def call(self, client, request):
+        return call_service(self.robot_spinner, client, request, self.call_timeout)
+
+    def initialise(self, request, response):
+        samples = from_matrix(request.samples, "samples")
+        if samples.shape[1] != 4 * self.robot.n_joints:
+            raise ValueError(f"samples need 4 x {self.robot.n_joints} columns (q, q_dot, "
+                             f"q_ddot, tau), got {samples.shape[1]}")
+        if request.reset:
+            self.learner = FeedForwardLearner(make_regressor(self.regressor_spec[0],
+                                                             **self.regressor_spec[1]),
+                                              self.learner.pid)
+            self.trial = 0
+        rejected_before = self.learner.n_rejected_
+        response.n_learned = self.learner.initialise(samples)
+        response.n_rejected = self.learner.n_rejected_ - rejected_before
+        return f"learned {response.n_learned} samples, rejected {response.n_rejected}"
+
+    def run_trials(self, request, response):
+        wait_for_services([self.step_client], self.wait_timeout, self.stop)
+        if self.state is None:           # the robot's state: one physics step, no torque
+            self.state = self.step(np.zeros(self.robot.n_joints), 1)
+        self.learner.learn = not request.frozen
+        errors, experience = [], []
+        for _ in range(request.n_trials):
+            if self.stop.is_set():
+                raise ValueError(f"stopped (SIGINT/SIGTERM) after {len(errors)} trials")
+            learned, rejected = self.learner.n_learned_, self.learner.n_rejected_
+            trial = self.learner.run_trial(self.step, self.state, *self.trajectory,
+                                           self.n_steps, self.dt)
+            self.state, self.trial = trial.end_state, self.trial + 1
+            errors.append(trial.tracking_error)
+            experience.append(trial.samples)
+            self.publish(trial, self.learner.n_learned_ - learned,
+                         self.learner.n_rejected_ - rejected)
+        response.tracking_errors = errors
+        response.experience = to_matrix(np.vstack(experience) if experience
+                                        else np.zeros((0, 4 * self.robot.n_joints)))
+        response.sim_time = self.state.time
+        return (f"{request.n_trials} trials, tracking error "
+                + ", ".join(f"{1e3 * e:.1f}" for e in errors) + " mm")
+
+    def publish(self, trial, n_learned, n_rejected):
+        msg = TrialResult(robot=self.robot.name, trial=self.trial,
+                          tracking_error=trial.tracking_error, n_learned=n_learned,
+                          n_rejected=n_rejected, desired=to_matrix(trial.desired),
+                          actual=to_matrix(trial.actual))
+        msg.header.stamp, msg.header.frame_id = sim_stamp(trial.end_state.time), "world"
+        self.result_pub.publish(msg)
+        self.get_logger().info(f"trial {self.trial}: tracking error "
+                               f"{1e3 * trial.tracking_error:.2f} mm")
+
+    def destroy_node(self):
+        self.robot_spinner.shutdown()
+        self.robot_node.destroy_node()
+        super().destroy_node()
+
+
+def main(args=None):
+    stop = init_with_stop_event(args)
+    try:
+        node = InverseDynamicsLearner(stop)
+    except Exception as exc:
+        rclpy.logging.get_logger("inverse_dynamics_learner").fatal(f"cannot start: {exc}")
+        rclpy.try_shutdown()
+        raise SystemExit(1) from None
+    spin_until_stopped(node, stop)
+
+
+if __name__ == "__main__":
+    main()
