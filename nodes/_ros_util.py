@@ -191,7 +191,12 @@ def robot_stepper(call, client, name):
                                                   n_steps=int(n_steps)))
         if not response.success:
             raise RuntimeError(f"the {name} robot refused a step: {response.message}")
-        state, point = response.joint_state, response.end_effector
-        return SimState(response.sim_time, np.array(state.position), np.array(state.velocity),
-                        np.array(state.effort), np.array([point.x, point.y, point.z]))
+        return sim_state(response)
     return step
+
+
+def sim_state(response):
+    """The SimState of a StepRobot or ResetRobot answer."""
+    state, point = response.joint_state, response.end_effector
+    return SimState(response.sim_time, np.array(state.position), np.array(state.velocity),
+                    np.array(state.effort), np.array([point.x, point.y, point.z]))

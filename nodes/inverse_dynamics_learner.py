@@ -12,13 +12,14 @@ end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
 
 Parameters:
 
-* ``robot``: the robot parameter file; ``step_service`` (default ``robot_sim/step``,
-  resolved in the node's namespace).
+* ``robot``: the robot parameter file; ``step_service`` and ``reset_service`` (default
+  ``robot_sim/step``, ``robot_sim/reset``, resolved in the node's namespace): every RunTrials
+  call first resets the robot to rest at ``centre_pose``.
 * ``control_rate`` (Hz, 100; up to 1000) and ``physics_step`` (s, 0.001, the simulator's):
   each control period advances round(1 / (control_rate · physics_step)) physics steps.
 * ``pid``: ``[kp, ki, kd]`` (thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0]).
 * ``centre_pose`` (joint angles): the star's centre is this pose's end-effector position,
-  and trials start from it (give the robot_sim the same ``initial_positions``);
+  and every RunTrials call starts there;
   ``star_u``, ``star_v`` (the star's plane, default world x and y), ``star_radius`` (m),
   ``star_spread`` (rad, 2π), ``star_start_angle`` (rad, 0).
 * ``regressor`` (``lwpr``) and ``regressor_params`` (JSON object of its hyperparameters,
@@ -47,10 +48,11 @@ from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_r
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.tasks import joint_trajectory, star_trajectory
 from lpa_transfer_interfaces.msg import TrialResult
-from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials, StepRobot
+from lpa_transfer_interfaces.srv import InitialiseLearner, ResetRobot, RunTrials, StepRobot
 from lpa_transfer_nodes._ros_util import (answering, array_parameter, call_service, from_matrix,
                                           init_with_stop_event, robot_stepper, sim_stamp,
-                                          spin_until_stopped, to_matrix, wait_for_services)
+                                          sim_state, spin_until_stopped, to_matrix,
+                                          wait_for_services)
 
 
 class InverseDynamicsLearner(Node):
@@ -87,8 +89,10 @@ class InverseDynamicsLearner(Node):
         self.robot_spinner.add_node(self.robot_node)
         self.step_client = self.robot_node.create_client(
             StepRobot, declare("step_service", "robot_sim/step"))
+        self.reset_client = self.robot_node.create_client(
+            ResetRobot, declare("reset_service", "robot_sim/reset"))
         self.step = robot_stepper(self.call, self.step_client, self.robot.name)
-        self.state, self.trial = None, 0
+        self.trial = 0
         self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
         self.create_service(InitialiseLearner, "~/initialise",
                             answering(self, "initialise", self.initialise))
@@ -102,6 +106,7 @@ class InverseDynamicsLearner(Node):
     def task(self, doubles):
         """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
         kinematics = robot_kinematics(self.robot, doubles("centre_pose") or None)
+        self.centre_pose = kinematics.home
         centre = kinematics.forward(kinematics.home[None])[0]
         dims = len(centre)
         u = doubles("star_u") or [1.0, 0.0, 0.0][:dims]
@@ -137,9 +142,8 @@ class InverseDynamicsLearner(Node):
         return f"learned {response.n_learned} samples, rejected {response.n_rejected}"
 
     def run_trials(self, request, response):
-        wait_for_services([self.step_client], self.wait_timeout, self.stop)
-        if self.state is None:           # the robot's state: one physics step, no torque
-            self.state = self.step(np.zeros(self.robot.n_joints), 1)
+        wait_for_services([self.step_client, self.reset_client], self.wait_timeout, self.stop)
+        self.state = self.reset_robot()
         self.learner.learn = not request.frozen
         errors, experience = [], []
         for _ in range(request.n_trials):
@@ -160,8 +164,16 @@ class InverseDynamicsLearner(Node):
         return (f"{request.n_trials} trials, tracking error "
                 + ", ".join(f"{1e3 * e:.1f}" for e in errors) + " mm")
 
+    def reset_robot(self):
+        """Put the robot at rest at the star's centre pose; its state."""
+        answer = self.call(self.reset_client, ResetRobot.Request(
+            positions=[float(q) for q in self.centre_pose]))
+        if not answer.success:
+            raise RuntimeError(f"the robot refused a reset: {answer.message}")
+        return sim_state(answer)
+
     def publish(self, trial, n_learned, n_rejected):
-        msg = TrialResult(robot=self.robot.name, trial=self.trial,
+        msg = TrialResult(robot=self.robot.name, task=self.get_name(), trial=self.trial,
                           tracking_error=trial.tracking_error, n_learned=n_learned,
                           n_rejected=n_rejected, desired=to_matrix(trial.desired),
                           actual=to_matrix(trial.actual))
