@@ -83,8 +83,9 @@ class InverseDynamicsLearner(Node):
         self.wait_timeout = float(declare("wait_timeout", 30.0))
         # Robot calls happen inside service callbacks: a client node of their own, spun by
         # its own executor, so the callback never re-enters this node's executor.
-        self.robot_node = rclpy.create_node("inverse_dynamics_learner_robot_client",
-                                            namespace=self.get_namespace())
+        self.robot_node = rclpy.create_node(  # no command-line remaps (__node would rename it)
+            f"{self.get_name()}_robot_client", namespace=self.get_namespace(),
+            use_global_arguments=False)
         self.robot_spinner = SingleThreadedExecutor()
         self.robot_spinner.add_node(self.robot_node)
         self.step_client = self.robot_node.create_client(

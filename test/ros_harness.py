@@ -25,9 +25,16 @@ def _terminate_with_parent():
     ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
+INTERACTIVE_DOMAIN_ID = 42   # tools/env.sh's default: scenario runs started by hand use it
+
+
 def unique_domain_id():
-    """A ROS domain id (1..100) unlikely to clash with other test processes on this host."""
-    return 1 + (os.getpid() * 7 + next(_DOMAINS)) % 100
+    """A ROS domain id (1..100) unlikely to clash with other test processes on this host, and
+    never the interactive default, so tests do not talk to a scenario running meanwhile."""
+    while True:
+        domain_id = 1 + (os.getpid() * 7 + next(_DOMAINS)) % 100
+        if domain_id != INTERACTIVE_DOMAIN_ID:
+            return domain_id
 
 
 def ros_env(domain_id, log_dir):

@@ -13,65 +13,8 @@ HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
 CONFIG=$HERE/config.yaml
 OUT=$ROOT/runs/two_link_graph
-while [ $# -gt 0 ]; do
-    case $1 in
-        --config) CONFIG=$(realpath "$2"); shift 2 ;;
-        --out) OUT=$(realpath -m "$2"); shift 2 ;;
-        *) echo "usage: $0 [--config FILE.yaml] [--out DIR]" >&2; exit 2 ;;
-    esac
-done
-
-# A run directory holds one run: refuse to clear a directory this script did not make.
-if [ -d "$OUT" ] && [ -n "$(ls -A "$OUT")" ] && [ ! -e "$OUT/.two_link_graph_run" ]; then
-    echo "error: $OUT exists and is not a run directory of this script" >&2; exit 2
-fi
-rm -rf "$OUT"; mkdir -p "$OUT/logs"; touch "$OUT/.two_link_graph_run"
-source "$ROOT/tools/env.sh"
-export ROS_LOG_DIR=$OUT/logs/ros PYTHONUNBUFFERED=1
-cd "$ROOT"
-PARAMS=(--ros-args --params-file "$CONFIG")
-
-# Every process gets its own session (setsid), so Ctrl-C reaches only this script, which then
-# stops them in order: the running step first, then the nodes in reverse start order, the
-# recorder last, so the bag holds everything the others published.
-PIDS=() NAMES=() CURRENT=""
-start() {   # start NAME MODULE ARGS...: a node in the background, its output in logs/NAME.log
-    local name=$1 module=$2; shift 2
-    setsid python -m "lpa_transfer_nodes.$module" "$@" >"$OUT/logs/$name.log" 2>&1 &
-    PIDS+=($!) NAMES+=("$name")
-}
-FAILED=0
-stop_process() {   # stop_process PID NAME: SIGINT (the nodes finalise their files), SIGKILL after 20 s
-    local pid=$1 name=$2 waited=0 code=0
-    kill -INT "$pid" 2>/dev/null || true
-    while kill -0 "$pid" 2>/dev/null && [ $waited -lt 200 ]; do sleep 0.1; waited=$((waited + 1)); done
-    if kill -0 "$pid" 2>/dev/null; then
-        echo "$name did not stop on SIGINT: killed" >&2; kill -KILL "$pid" 2>/dev/null || true
-        FAILED=1
-    fi
-    wait "$pid" || code=$?
-    if [ $code != 0 ]; then echo "$name exited with $code (see $OUT/logs/$name.log)" >&2; FAILED=1; fi
-}
-stop_all() {
-    if [ -n "$CURRENT" ]; then stop_process "$CURRENT" "the running step"; CURRENT=""; fi
-    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do stop_process "${PIDS[$i]}" "${NAMES[$i]}"; done
-    PIDS=() NAMES=()
-}
-trap stop_all EXIT
-trap 'echo "interrupted: stopping the nodes" >&2; stop_all; exit 130' INT TERM
-
-step() {   # step NAME COMMAND...: one step with its own log, waited for (so Ctrl-C interrupts it)
-    local name=$1; shift
-    echo "[$(date +%T)] $name" >&2
-    setsid "$@" >"$OUT/logs/$name.log" 2>&1 &
-    CURRENT=$!
-    local code=0; wait "$CURRENT" || code=$?
-    CURRENT=""
-    if [ $code != 0 ]; then
-        echo "error: $name failed; its log ($OUT/logs/$name.log) ends with:" >&2
-        tail -n 15 "$OUT/logs/$name.log" >&2; exit 1
-    fi
-}
+SCENARIO=two_link_graph
+source "$ROOT/scenarios/lib/graph.sh"
 
 START=$(date +%s.%N)
 start recorder recorder "${PARAMS[@]}" -p "output:=$OUT/run.mcap"

@@ -1,0 +1,309 @@
+#!/usr/bin/env python3
+"""Thesis §5.5.3 over the node graph: does transfer accelerate online inverse-dynamics learning?
+
+Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML); the robot
+simulators, one ``inverse_dynamics_learner`` per robot and star, ``lpa_mapping`` and the
+recorder are running, and correspondence_collector has saved ``pairs_<seed>.npz`` (source =
+the first robot of ``robots``) for every seed.
+
+For every seed: PA and LPA models in both directions from that seed's correspondences, fitted
+by the mapping service. For every target robot and star, the conditions of §5.5.3, each a
+fresh learner run for ``n_trials`` trials:
+
+* ``uninitialised``: learning from scratch (the simulation is deterministic, so this curve is
+  the same for every seed; it is run once and reused);
+* ``random``: initialised with the target's own babbling data (its side of the pairs);
+* ``transfer-PA`` / ``transfer-LPA``: initialised with the other robot's experience of the
+  same star from scratch (its first ``n_source_trials`` trials), transferred through the
+  mapping service.
+
+Writes into ``output_dir``: ``results.json`` (every curve), ``learning_curves.csv``,
+``fig5_7_5_8_learning_curves.png`` (mean ± std per condition, like Fig. 5-7/5-8),
+``fig5_6_traces.png`` (first and last trial from scratch on Star 2, like Fig. 5-6) and
+``report.txt`` (trials to convergence and training time saved, beside the thesis' numbers).
+"""
+import csv
+import json
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+
+from lpa_transfer.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
+from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
+                                         TransferPoints)
+from lpa_transfer_nodes._ros_util import (call_service, from_matrix,  # noqa: E402
+                                          init_with_stop_event, to_matrix, wait_for_services)
+
+CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
+TRIAL_SECONDS = 8.4
+THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
+                    "63% of training time saved (random init: 4.6%)",
+          "pincher": "58.7% of training time saved (random init: 15.8%)"}
+
+
+class Experiment(Node):
+    def __init__(self, stop):
+        super().__init__("experiment")
+        self.stop = stop
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        self.robots = list(declare("robots", ["youbot", "pincher"]))
+        files = list(declare("robot_files", [""]))
+        self.n_joints = {robot: load_robot_params(path).n_joints
+                         for robot, path in zip(self.robots, files)}
+        self.stars = list(declare("stars", ["star1", "star2"]))
+        self.seeds = list(declare("seeds", [0]))
+        self.n_trials = declare("n_trials", 20)
+        self.n_source_trials = declare("n_source_trials", 15)
+        self.fit = dict(latent_dim=declare("latent_dim", 16), n_min=declare("n_min", 40),
+                        c_min=declare("c_min", 1e-7))
+        self.tolerance = declare("convergence_tolerance", 0.1)
+        self.babbling_seconds = declare("babbling_seconds", 14.4)
+        self.output_dir = Path(declare("output_dir", "."))
+        self.timeout = float(declare("call_timeout", 600.0))
+        self.spinner = SingleThreadedExecutor()
+        self.spinner.add_node(self)
+        self.service_clients = {}
+        self.traces = {}
+        self.create_subscription(TrialResult, "/youbot/trial_result", self.on_trial, 50)
+        self.create_subscription(TrialResult, "/pincher/trial_result", self.on_trial, 50)
+        self.recording = None
+
+    def client(self, srv_type, name):
+        if name not in self.service_clients:
+            self.service_clients[name] = self.create_client(srv_type, name)
+        return self.service_clients[name]
+
+    def call(self, srv_type, name, **fields):
+        answer = call_service(self.spinner, self.client(srv_type, name), srv_type.Request(
+            **fields), self.timeout)
+        if not answer.success:
+            raise RuntimeError(f"{name} failed: {answer.message}")
+        return answer
+
+    def on_trial(self, msg):
+        if self.recording is not None:
+            self.recording.append(msg)
+
+    # -- one learner run --------------------------------------------------------------------
+    def learn(self, robot, star, initial_data):
+        """Reset the learner, initialise it, run the trials: (errors, experience, messages)."""
+        learner = f"/{robot}/{star}"
+        self.call(InitialiseLearner, f"{learner}/initialise", samples=to_matrix(initial_data),
+                  reset=True)
+        self.recording = []
+        answer = self.call(RunTrials, f"{learner}/run_trials", n_trials=self.n_trials)
+        deadline = time.monotonic() + 5
+        while len(self.recording) < self.n_trials and time.monotonic() < deadline:
+            self.spinner.spin_once(timeout_sec=0.05)
+        messages, self.recording = self.recording, None
+        return (list(answer.tracking_errors), from_matrix(answer.experience, "experience"),
+                messages)
+
+    def transfer(self, model_id, points):
+        answer = self.call(TransferPoints, "/lpa_mapping/transfer", model_id=model_id,
+                           source=to_matrix(points))
+        return from_matrix(answer.target, "target")
+
+    def fit_models(self, seed, pairs):
+        """PA and LPA in both directions; model ids like 'youbot->pincher/lpa/seed0'."""
+        for source, target in (self.robots, self.robots[::-1]):
+            for method in ("pa", "lpa"):
+                model_id = f"{source}->{target}/{method}/seed{seed}"
+                fields = dict(latent_dim=self.fit["latent_dim"], random_state=seed)
+                if method == "lpa":
+                    fields.update(n_min=self.fit["n_min"], c_min=self.fit["c_min"],
+                                  cluster_dims=list(range(2 * self.n_joints[source])))
+                answer = self.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
+                                   method=method, source=to_matrix(pairs[source]),
+                                   target=to_matrix(pairs[target]), **fields)
+                self.get_logger().info(answer.message)
+
+    def run(self, pair_files):
+        wait_for_services([self.client(RunTrials, f"/{r}/{s}/run_trials")
+                           for r in self.robots for s in self.stars]
+                          + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop)
+        curves = {f"{r}/{s}/{c}": [] for r in self.robots for s in self.stars
+                  for c in CONDITIONS}
+        scratch = {}
+        for robot in self.robots:
+            for star in self.stars:
+                empty = np.zeros((0, 4 * self.n_joints[robot]))
+                errors, experience, messages = self.learn(robot, star, empty)
+                scratch[robot, star] = experience[:self.n_source_trials * len(experience)
+                                                  // self.n_trials]
+                curves[f"{robot}/{star}/uninitialised"] = [errors] * len(self.seeds)
+                self.traces[robot, star] = [_trace(messages[0]), _trace(messages[-1])]
+                self.get_logger().info(f"{robot} {star} from scratch: {_mm(errors)}")
+        for seed, path in zip(self.seeds, pair_files):
+            source_side, target_side = load_correspondences(path)
+            pairs = dict(zip(self.robots, (source_side, target_side)))
+            self.fit_models(seed, pairs)
+            for target in self.robots:
+                source = next(r for r in self.robots if r != target)
+                for star in self.stars:
+                    data = {"random": pairs[target]}
+                    for method in ("PA", "LPA"):
+                        data[f"transfer-{method}"] = self.transfer(
+                            f"{source}->{target}/{method.lower()}/seed{seed}",
+                            scratch[source, star])
+                    for condition, initial in data.items():
+                        errors, _, _ = self.learn(target, star, initial)
+                        curves[f"{target}/{star}/{condition}"].append(errors)
+                        self.get_logger().info(f"seed {seed} {target} {star} {condition}: "
+                                               f"{_mm(errors)}")
+        return curves
+
+
+def _mm(errors):
+    return " ".join(f"{1e3 * e:.1f}" for e in errors) + " mm"
+
+
+def _trace(msg):
+    return {"trial": msg.trial, "desired": from_matrix(msg.desired, "desired").tolist(),
+            "actual": from_matrix(msg.actual, "actual").tolist()}
+
+
+# --------------------------------------------------------------------------- analysis
+def trials_to_convergence(curve, reference_final, tolerance):
+    """First trial (1-based) from which the error stays within (1 + tolerance) of the scratch
+    learner's final error; len(curve) + 1 when it never does."""
+    threshold = (1 + tolerance) * reference_final
+    above = np.flatnonzero(np.asarray(curve) > threshold)
+    return 1 if len(above) == 0 else int(above[-1]) + 2
+
+
+def convergence_table(curves, robots, stars, tolerance, babbling_seconds):
+    """Per target robot: trials to convergence per star and condition (mean curves), and the
+    training time saved against learning from scratch, as §5.5.3 computes it."""
+    rows, savings = [], {}
+    for robot in robots:
+        seconds = {c: 0.0 for c in CONDITIONS}
+        for star in stars:
+            mean = {c: np.mean(curves[f"{robot}/{star}/{c}"], axis=0) for c in CONDITIONS}
+            final = mean["uninitialised"][-1]
+            for condition in CONDITIONS:
+                k = trials_to_convergence(mean[condition], final, tolerance)
+                rows.append((robot, star, condition, k, len(mean[condition])))
+                seconds[condition] += k * TRIAL_SECONDS
+        for condition in CONDITIONS[1:]:
+            seconds[condition] += babbling_seconds
+        savings[robot] = {c: 1 - seconds[c] / seconds["uninitialised"] for c in CONDITIONS[1:]}
+    return rows, savings
+
+
+def write_outputs(curves, traces, experiment, out):
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps({
+        "curves_m": curves, "seeds": experiment.seeds,
+        "traces": {f"{r}/{s}": t for (r, s), t in traces.items()}}) + "\n")
+    with open(out / "learning_curves.csv", "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["target", "star", "condition", "seed", "trial", "tracking_error_m"])
+        for key, runs in curves.items():
+            robot, star, condition = key.split("/")
+            for seed, errors in zip(experiment.seeds, runs):
+                writer.writerows([robot, star, condition, seed, trial + 1, repr(error)]
+                                 for trial, error in enumerate(errors))
+    plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
+    plot_traces(traces, experiment, out / "fig5_6_traces.png")
+    rows, savings = convergence_table(curves, experiment.robots, experiment.stars,
+                                      experiment.tolerance, experiment.babbling_seconds)
+    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.seeds)} seed(s), "
+             f"{experiment.n_trials} trials a condition; converged = the mean error stays "
+             f"within {experiment.tolerance:.0%} of learning from scratch's final error", "",
+             f"{'target':<8} {'star':<6} {'condition':<14} {'trials to converge':>18}"]
+    lines += [f"{r:<8} {s:<6} {c:<14} {k if k <= n else f'> {n}':>18}"
+              for r, s, c, k, n in rows]
+    lines.append("")
+    for robot, saved in savings.items():
+        lines.append(f"{robot} as target, training time saved (trials x 8.4 s, + "
+                     f"{experiment.babbling_seconds:g} s babbling for initialised runs): "
+                     + ", ".join(f"{c} {100 * v:.1f}%" for c, v in saved.items()))
+        lines.append(f"  thesis: {THESIS.get(robot, '-')}")
+    text = "\n".join(lines) + "\n"
+    (out / "report.txt").write_text(text)
+    return text
+
+
+def plot_curves(curves, experiment, path):
+    fig, axes = plt.subplots(len(experiment.robots), len(experiment.stars), squeeze=False,
+                             figsize=(6 * len(experiment.stars), 4.2 * len(experiment.robots)),
+                             constrained_layout=True)
+    for row, robot in enumerate(experiment.robots):
+        for col, star in enumerate(experiment.stars):
+            ax = axes[row, col]
+            for condition in CONDITIONS:
+                runs = np.asarray(curves[f"{robot}/{star}/{condition}"]) * 1e3
+                trials = np.arange(1, runs.shape[1] + 1)
+                mean, std = runs.mean(axis=0), runs.std(axis=0)
+                line, = ax.plot(trials, mean, marker="o", ms=3, label=condition)
+                ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
+                                alpha=0.2)
+            ax.set(title=f"{robot} learning {star}", xlabel="trial",
+                   ylabel="tracking error (mm)", yscale="log")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend()
+    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.seeds)} seed(s)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_traces(traces, experiment, path):
+    star = experiment.stars[-1]
+    fig, axes = plt.subplots(1, len(experiment.robots), squeeze=False,
+                             figsize=(6 * len(experiment.robots), 5), constrained_layout=True)
+    for ax, robot in zip(axes[0], experiment.robots):
+        first, last = traces[robot, star]
+        desired = np.asarray(first["desired"])
+        ax.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired")
+        for trace, style in ((first, "tab:red"), (last, "tab:blue")):
+            actual = np.asarray(trace["actual"])
+            ax.plot(actual[:, 0], actual[:, 1], color=style, lw=1,
+                    label=f"trial {trace['trial']}")
+        ax.set(title=f"{robot}, {star}, learning from scratch", xlabel="x (m)",
+               ylabel="y (m)", aspect="equal")
+        ax.legend()
+    fig.suptitle("Thesis Fig. 5-6: end effector in the first and last trial")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(args=None):
+    argv = sys.argv if args is None else args
+    pair_files = [a for a in argv[1:] if a.endswith(".npz")]
+    stop = init_with_stop_event([a for a in argv if not a.endswith(".npz")])
+    node = None
+    try:
+        node = Experiment(stop)
+        if len(pair_files) != len(node.seeds):
+            raise ValueError(f"give one correspondence file per seed ({node.seeds}), got "
+                             f"{pair_files}")
+        start = time.perf_counter()
+        curves = node.run(pair_files)
+        text = write_outputs(curves, node.traces, node, node.output_dir)
+        text += f"\nexperiment wall time {time.perf_counter() - start:.0f} s\n"
+        (node.output_dir / "report.txt").write_text(text)
+        print(text, end="")
+        return 0
+    except Exception as exc:
+        print(f"experiment failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        if node is not None:
+            node.spinner.shutdown()
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
