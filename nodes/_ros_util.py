@@ -200,3 +200,44 @@ def sim_state(response):
     state, point = response.joint_state, response.end_effector
     return SimState(response.sim_time, np.array(state.position), np.array(state.velocity),
                     np.array(state.effort), np.array([point.x, point.y, point.z]))
+
+
+def _describe(exc):
+    """An error for the log: the message of an expected failure (bad parameter or request,
+    missing file or service), the type too for anything else."""
+    if isinstance(exc, (ValueError, RuntimeError, OSError)):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
+
+
+def serve(name, make_node, args=None):
+    """main() of a serving node: ``make_node(stop)`` then spin until SIGINT/SIGTERM; a node
+    that cannot start logs why and exits 1."""
+    stop = init_with_stop_event(args)
+    try:
+        node = make_node(stop)
+    except Exception as exc:  # a bad parameter or file: say what, exit 1
+        rclpy.logging.get_logger(name).fatal(f"cannot start: {_describe(exc)}")
+        rclpy.try_shutdown()
+        raise SystemExit(1) from None
+    spin_until_stopped(node, stop)
+
+
+def run_job(name, make_node, job, args=None):
+    """main() of a node with one job (a collector, an experiment client): ``make_node(stop)``,
+    then ``job(node)``, then everything shut down (the node's ``spinner`` executor too).
+    Returns ``(node, job's result)``; any error is logged as fatal and exits 1."""
+    stop = init_with_stop_event(args)
+    node = None
+    try:
+        node = make_node(stop)
+        return node, job(node)
+    except Exception as exc:  # a bad parameter, a refused call, a missing service: say what
+        rclpy.logging.get_logger(name).fatal(_describe(exc))
+        raise SystemExit(1) from None
+    finally:
+        if node is not None:
+            if getattr(node, "spinner", None) is not None:
+                node.spinner.shutdown()
+            node.destroy_node()
+        rclpy.try_shutdown()

@@ -53,7 +53,6 @@ import os
 import time
 
 import numpy as np
-import rclpy
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -67,8 +66,8 @@ from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
-                                          init_with_stop_event, robot_stepper, sim_stamp,
-                                          to_matrix, wait_for_services, wait_for_subscribers)
+                                          robot_stepper, run_job, sim_stamp, to_matrix,
+                                          wait_for_services, wait_for_subscribers)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
@@ -217,22 +216,7 @@ class CorrespondenceCollector(Node):
 
 
 def main(args=None):
-    stop = init_with_stop_event(args)
-    logger = rclpy.logging.get_logger("correspondence_collector")
-    node, code = None, 0
-    try:
-        node = CorrespondenceCollector(stop)
-        node.run()
-    except Exception as exc:  # a bad parameter, a refused step, a missing service: say what
-        logger.fatal(f"{type(exc).__name__}: {exc}" if not isinstance(exc, (ValueError,
-                     RuntimeError, OSError)) else str(exc))
-        code = 1
-    finally:
-        if node is not None:
-            node.executor.shutdown()
-            node.destroy_node()
-        rclpy.try_shutdown()
-    raise SystemExit(code)
+    run_job("correspondence_collector", CorrespondenceCollector, lambda node: node.run(), args)
 
 
 if __name__ == "__main__":

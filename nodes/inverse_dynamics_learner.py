@@ -50,8 +50,7 @@ from lpa_transfer.tasks import joint_trajectory, star_trajectory
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.srv import InitialiseLearner, ResetRobot, RunTrials, StepRobot
 from lpa_transfer_nodes._ros_util import (answering, array_parameter, call_service, from_matrix,
-                                          init_with_stop_event, robot_stepper, sim_stamp,
-                                          sim_state, spin_until_stopped, to_matrix,
+                                          robot_stepper, serve, sim_stamp, sim_state, to_matrix,
                                           wait_for_services)
 
 
@@ -190,14 +189,7 @@ class InverseDynamicsLearner(Node):
 
 
 def main(args=None):
-    stop = init_with_stop_event(args)
-    try:
-        node = InverseDynamicsLearner(stop)
-    except Exception as exc:
-        rclpy.logging.get_logger("inverse_dynamics_learner").fatal(f"cannot start: {exc}")
-        rclpy.try_shutdown()
-        raise SystemExit(1) from None
-    spin_until_stopped(node, stop)
+    serve("inverse_dynamics_learner", InverseDynamicsLearner, args)
 
 
 if __name__ == "__main__":

@@ -36,8 +36,8 @@ import json
 import numpy as np
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, from_matrix,
-                                          init_with_stop_event, spin_until_stopped, to_matrix)
+from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, from_matrix, serve,
+                                          to_matrix)
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.correspondences import load_correspondences
 from lpa_transfer.model_store import ModelStore, training_rmse
@@ -161,8 +161,7 @@ class MappingService(Node):
 
 
 def main(args=None):
-    stop = init_with_stop_event(args)
-    spin_until_stopped(MappingService(), stop)
+    serve("lpa_mapping", lambda stop: MappingService(), args)
 
 
 if __name__ == "__main__":

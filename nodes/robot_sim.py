@@ -40,7 +40,6 @@ saying what was wrong; the simulation is not touched and the node keeps serving.
 import math
 import os
 
-import rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from geometry_msgs.msg import Point, PointStamped
@@ -50,8 +49,7 @@ from std_msgs.msg import Float64MultiArray
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (answering, array_parameter, init_with_stop_event,
-                                          sim_stamp, spin_until_stopped)
+from lpa_transfer_nodes._ros_util import answering, array_parameter, serve, sim_stamp
 
 WORLD_FRAME = "world"
 
@@ -153,14 +151,7 @@ class RobotSim(Node):
 
 
 def main(args=None):
-    stop = init_with_stop_event(args)
-    try:
-        node = RobotSim()
-    except Exception as exc:
-        rclpy.logging.get_logger("robot_sim").fatal(f"cannot start: {exc}")
-        rclpy.try_shutdown()
-        raise SystemExit(1) from None
-    spin_until_stopped(node, stop)
+    serve("robot_sim", lambda stop: RobotSim(), args)
 
 
 if __name__ == "__main__":

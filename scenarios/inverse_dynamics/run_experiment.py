@@ -32,7 +32,6 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
@@ -41,8 +40,8 @@ from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
                                          TransferPoints)
-from lpa_transfer_nodes._ros_util import (call_service, from_matrix,  # noqa: E402
-                                          init_with_stop_event, to_matrix, wait_for_services)
+from lpa_transfer_nodes._ros_util import (call_service, from_matrix, run_job,  # noqa: E402
+                                          to_matrix, wait_for_services)
 
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
 TRIAL_SECONDS = 8.4
@@ -281,28 +280,21 @@ def plot_traces(traces, experiment, path):
 def main(args=None):
     argv = sys.argv if args is None else args
     pair_files = [a for a in argv[1:] if a.endswith(".npz")]
-    stop = init_with_stop_event([a for a in argv if not a.endswith(".npz")])
-    node = None
-    try:
-        node = Experiment(stop)
+    start = time.perf_counter()
+
+    def experiment(node):
         if len(pair_files) != len(node.seeds):
             raise ValueError(f"give one correspondence file per seed ({node.seeds}), got "
                              f"{pair_files}")
-        start = time.perf_counter()
-        curves = node.run(pair_files)
-        text = write_outputs(curves, node.traces, node, node.output_dir)
-        text += f"\nexperiment wall time {time.perf_counter() - start:.0f} s\n"
-        (node.output_dir / "report.txt").write_text(text)
-        print(text, end="")
-        return 0
-    except Exception as exc:
-        print(f"experiment failed: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
-    finally:
-        if node is not None:
-            node.spinner.shutdown()
-            node.destroy_node()
-        rclpy.try_shutdown()
+        return node.run(pair_files)
+
+    node, curves = run_job("experiment", Experiment, experiment,
+                           [a for a in argv if not a.endswith(".npz")])
+    text = write_outputs(curves, node.traces, node, node.output_dir)
+    text += f"\nexperiment wall time {time.perf_counter() - start:.0f} s\n"
+    (node.output_dir / "report.txt").write_text(text)
+    print(text, end="")
+    return 0
 
 
 if __name__ == "__main__":

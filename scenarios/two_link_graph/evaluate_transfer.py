@@ -25,7 +25,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
@@ -36,8 +35,8 @@ from lpa_transfer.kinematics import (domain_data, end_effector_rmse, planar_forw
 from lpa_transfer.learners import LocallyWeightedRegression
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer_interfaces.srv import StepRobot, TransferPoints
-from lpa_transfer_nodes._ros_util import (call_service, from_matrix, init_with_stop_event,
-                                          robot_stepper, to_matrix, wait_for_services)
+from lpa_transfer_nodes._ros_util import (call_service, from_matrix, robot_stepper, run_job,
+                                          to_matrix, wait_for_services)
 
 
 class TransferEvaluation(Node):
@@ -130,19 +129,7 @@ def report_text(result):
 
 
 def main(args=None):
-    stop = init_with_stop_event(args)
-    node = None
-    try:
-        node = TransferEvaluation(stop)
-        result = node.run()
-    except Exception as exc:  # a missing service, a refused transfer, a bad parameter: say it
-        print(f"transfer_evaluation failed: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
-    finally:
-        if node is not None:
-            node.spinner.shutdown()
-            node.destroy_node()
-        rclpy.try_shutdown()
+    node, result = run_job("transfer_evaluation", TransferEvaluation, lambda n: n.run(), args)
     node.output_dir.mkdir(parents=True, exist_ok=True)
     (node.output_dir / "evaluation.json").write_text(json.dumps(result, indent=2) + "\n")
     text = report_text(result)
