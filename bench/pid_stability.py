@@ -38,9 +38,10 @@ from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
 from lpa_transfer.tasks import joint_trajectory, star_trajectory  # noqa: E402
 
 PHYSICS_STEP = 1e-3
-#: robot file stem: (PID kp, ki, kd of §5.5.2, star centre pose q_c, star radius m)
-ROBOTS = {"pincher_arm": ((5.0, 0.01, 0.1), [0.0, 0.6, 0.9, 0.6], 0.05),
-          "youbot_arm": ((100.0, 0.01, 2.0), [0.0, 0.5, 0.8, 0.5, 0.0], 0.10)}
+#: robot file stem: (PID kp, ki, kd of §5.5.2, star centre pose q_c, star radius m): Star 1
+#: of scenarios/inverse_dynamics/config.yaml (every point reachable)
+ROBOTS = {"pincher_arm": ((5.0, 0.01, 0.1), [0.0, 0.3, 1.0, 0.8], 0.05),
+          "youbot_arm": ((100.0, 0.01, 2.0), [0.0, 0.0, 1.2, 0.8, 0.0], 0.10)}
 #: the star's plane (world x-y: the arms' vertical plane, gravity along -y)
 PLANE_U, PLANE_V = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]
 
@@ -62,8 +63,10 @@ def desired(robot, q_centre, radius, dt):
     kinematics = robot_kinematics(robot)
     centre = kinematics.forward(np.array([q_centre]))[0]
     x_d = star_trajectory(centre, PLANE_U, PLANE_V, radius, dt)
-    q, qd, qdd, _ = joint_trajectory(kinematics, np.vstack([centre[None], x_d]),
-                                     np.array(q_centre, dtype=float), dt)
+    q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack([centre[None], x_d]),
+                                             np.array(q_centre, dtype=float), dt)
+    if residuals.max() > 1e-6:
+        raise SystemExit(f"{robot.name}: the star leaves the workspace by {residuals.max()} m")
     return x_d, q[1:], qd[1:], qdd[1:]
 
 
