@@ -59,8 +59,13 @@ def test_valid_file_and_extra_keys_are_accepted(tmp_path):
     ("name = ", "name = = ", "not valid TOML"),
 ])
 def test_broken_file_names_file_and_key(tmp_path, old, new, message):
-    assert old in VALID
-    path = write(tmp_path, VALID.replace(old, new, 1))
+    assert_broken(tmp_path, VALID, old, new, message)
+
+
+def assert_broken(tmp_path, text, old, new, message):
+    """``text`` with ``old`` replaced by ``new`` fails to load with ``message`` and its path."""
+    assert old in text
+    path = write(tmp_path, text.replace(old, new, 1))
     with pytest.raises(ValueError, match=message) as info:
         load_robot_params(path)
     assert str(path) in str(info.value)
@@ -171,11 +176,7 @@ def test_planar_file_is_the_planar_special_case(tmp_path):
     ("[base]\nxyz = [0.0, 0.0, 0.1]", "[base]\nxyz = 0.1", r"base: key 'xyz' must be a list of 3"),
 ])
 def test_broken_serial_file_names_file_and_key(tmp_path, old, new, message):
-    assert old in SERIAL
-    path = write(tmp_path, SERIAL.replace(old, new, 1))
-    with pytest.raises(ValueError, match=message) as info:
-        load_robot_params(path)
-    assert str(path) in str(info.value)
+    assert_broken(tmp_path, SERIAL, old, new, message)
 
 
 def test_planar_file_may_not_place_its_base(tmp_path):
