@@ -16,6 +16,8 @@ import numpy as np
 
 FD_STEP = 1e-7
 MAX_HALVINGS = 30   # step halvings before an iteration counts as not shrinking the error
+MAX_NUDGES = 3      # restarts off a stalled pose (see _nudge)
+NUDGE = 0.05
 
 
 def jacobian(forward, q):
@@ -31,14 +33,17 @@ def solve(forward, x_target, q_start, joint_limits, damping=0.01, tolerance=1e-7
 
     Damped least squares (module docstring) with joint limits enforced by clipping; joints at
     a limit that the step would push beyond are left out of the step, and a step that does not
-    shrink the error is halved (up to ``MAX_HALVINGS`` times). Stops when the
-    task-space error is below ``tolerance`` (m) or stops shrinking. ``residual`` is the
-    remaining distance ||forward(q) − x_target||.
+    shrink the error is halved (up to ``MAX_HALVINGS`` times). When no step helps, q is nudged
+    towards the middle of its ranges and the iteration goes on (up to ``MAX_NUDGES`` times):
+    this leaves singular poses such as a stretched arm asked to pull straight in. Stops when
+    the task-space error is below ``tolerance`` (m); returns the best pose found and its
+    ``residual``, the distance ||forward(q) − x_target||.
     """
     limits = np.asarray(joint_limits, dtype=np.float64)
     x_target = np.asarray(x_target, dtype=np.float64)
     q = np.clip(np.asarray(q_start, dtype=np.float64), limits[:, 0], limits[:, 1])
     error = x_target - forward(q[None])[0]
+    best, nudges = (q, error), MAX_NUDGES
     for _ in range(max_iterations):
         if np.linalg.norm(error) < tolerance:
             break
@@ -53,10 +58,23 @@ def solve(forward, x_target, q_start, joint_limits, damping=0.01, tolerance=1e-7
             if np.linalg.norm(error_next) < np.linalg.norm(error) * (1 - 1e-9):
                 break
             step = step / 2
-        else:
-            break
+        else:   # stalled: a local minimum, or a singular pose such as a stretched arm
+            if nudges == 0:
+                break
+            nudges -= 1
+            q_next = _nudge(q, limits)
+            error_next = x_target - forward(q_next[None])[0]
         q, error = q_next, error_next
-    return q, float(np.linalg.norm(error))
+        if np.linalg.norm(error) < np.linalg.norm(best[1]):
+            best = (q, error)
+    return best[0], float(np.linalg.norm(best[1]))
+
+
+def _nudge(q, limits):
+    """q moved NUDGE of the way towards the middle of its (finite) joint ranges: off a
+    singular pose, where the gradient vanishes (e.g. a stretched arm pulled straight in)."""
+    middle = np.where(np.isfinite(limits).all(axis=1), limits.mean(axis=1), q)
+    return q + NUDGE * (middle - q)
 
 
 def _dls_step(J, error, damping):

@@ -190,3 +190,14 @@ def test_solve_path_with_limits_options_and_empty_paths():
     np.testing.assert_allclose(residuals, np.linalg.norm(forward(Q) - points, axis=1))
     Q, residuals = solve_path(forward, np.empty((0, 2)), [0.5, 0.5], limits)
     assert Q.shape == (0, 2) and residuals.shape == (0,)
+
+
+def test_a_stretched_arm_pulled_straight_in_leaves_the_singular_pose():
+    """From q = (0, 0) (stretched, the 2-link robots' home) the gradient towards a point on
+    the arm's line vanishes; the solver nudges off the singular pose and reaches it."""
+    lengths, limits = np.array([0.6, 0.2]), np.array([[0.0, np.pi / 2], [0.0, np.pi]])
+    forward = lambda q: planar_forward_kinematics(q, lengths)  # noqa: E731
+    for target in ([0.5, 0.3], [0.3, 0.5]):
+        q, residual = solve(forward, target, [0.0, 0.0], limits)
+        assert residual < 1e-6, (target, q)
+        assert np.allclose(forward(q[None])[0], target, atol=1e-6)
