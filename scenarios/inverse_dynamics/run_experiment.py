@@ -17,6 +17,8 @@ fresh learner run for ``n_trials`` trials:
   same star from scratch (its first ``n_source_trials`` trials), transferred through the
   mapping service.
 
+The outputs are rewritten after every seed, so an interrupted run keeps what it finished.
+
 Writes into ``output_dir``: ``results.json`` (every curve), ``learning_curves.csv``,
 ``fig5_7_5_8_learning_curves.png`` (mean ± std per condition, like Fig. 5-7/5-8),
 ``fig5_6_traces.png`` (first and last trial from scratch on Star 2, like Fig. 5-6) and
@@ -76,6 +78,7 @@ class Experiment(Node):
         self.create_subscription(TrialResult, "/youbot/trial_result", self.on_trial, 50)
         self.create_subscription(TrialResult, "/pincher/trial_result", self.on_trial, 50)
         self.recording = None
+        self.done_seeds = []
 
     def client(self, srv_type, name):
         if name not in self.service_clients:
@@ -140,7 +143,7 @@ class Experiment(Node):
                 errors, experience, messages = self.learn(robot, star, empty)
                 scratch[robot, star] = experience[:self.n_source_trials * len(experience)
                                                   // self.n_trials]
-                curves[f"{robot}/{star}/uninitialised"] = [errors] * len(self.seeds)
+                scratch[robot, star, "errors"] = errors
                 self.traces[robot, star] = [_trace(messages[0]), _trace(messages[-1])]
                 self.get_logger().info(f"{robot} {star} from scratch: {_mm(errors)}")
         for seed, path in zip(self.seeds, pair_files):
@@ -160,6 +163,12 @@ class Experiment(Node):
                         curves[f"{target}/{star}/{condition}"].append(errors)
                         self.get_logger().info(f"seed {seed} {target} {star} {condition}: "
                                                f"{_mm(errors)}")
+            self.done_seeds.append(seed)
+            for robot in self.robots:     # deterministic: the same curve for every seed
+                for star in self.stars:
+                    curves[f"{robot}/{star}/uninitialised"] = (
+                        [scratch[robot, star, "errors"]] * len(self.done_seeds))
+            write_outputs(curves, self.traces, self, self.output_dir)   # results so far
         return curves
 
 
@@ -203,21 +212,21 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds):
 def write_outputs(curves, traces, experiment, out):
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({
-        "curves_m": curves, "seeds": experiment.seeds,
+        "curves_m": curves, "seeds": experiment.done_seeds,
         "traces": {f"{r}/{s}": t for (r, s), t in traces.items()}}) + "\n")
     with open(out / "learning_curves.csv", "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["target", "star", "condition", "seed", "trial", "tracking_error_m"])
         for key, runs in curves.items():
             robot, star, condition = key.split("/")
-            for seed, errors in zip(experiment.seeds, runs):
+            for seed, errors in zip(experiment.done_seeds, runs):
                 writer.writerows([robot, star, condition, seed, trial + 1, repr(error)]
                                  for trial, error in enumerate(errors))
     plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
     plot_traces(traces, experiment, out / "fig5_6_traces.png")
     rows, savings = convergence_table(curves, experiment.robots, experiment.stars,
                                       experiment.tolerance, experiment.babbling_seconds)
-    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.seeds)} seed(s), "
+    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s), "
              f"{experiment.n_trials} trials a condition; converged = the mean error stays "
              f"within {experiment.tolerance:.0%} of learning from scratch's final error", "",
              f"{'target':<8} {'star':<6} {'condition':<14} {'trials to converge':>18}"]
@@ -252,7 +261,7 @@ def plot_curves(curves, experiment, path):
                    ylabel="tracking error (mm)", yscale="log")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
-    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.seeds)} seed(s)")
+    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
