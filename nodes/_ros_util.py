@@ -166,16 +166,18 @@ def wait_for_subscribers(publisher, count, timeout, stop):
         time.sleep(0.05)
 
 
-def call_service(executor, client, request, timeout):
+def call_service(executor, client, request, timeout, stop=None):
     """Call a service and wait for the answer with a ``spin_once`` loop (rclpy 7.1's
     ``spin_until_future_complete`` slows down with every call); ServiceTimeout after
-    ``timeout`` s."""
+    ``timeout`` s, or as soon as the ``stop`` event (SIGINT/SIGTERM) is set."""
     future = client.call_async(request)
     deadline = time.monotonic() + timeout
     while not future.done():
-        if time.monotonic() > deadline:
+        stopped = stop is not None and stop.is_set()
+        if stopped or time.monotonic() > deadline:
             client.remove_pending_request(future)
-            raise ServiceTimeout(f"service {client.srv_name} did not answer within {timeout:g} s")
+            raise ServiceTimeout(f"stopped while waiting for {client.srv_name}" if stopped else
+                                 f"service {client.srv_name} did not answer within {timeout:g} s")
         executor.spin_once(timeout_sec=0.05)
     return future.result()
 

@@ -87,7 +87,7 @@ class Experiment(Node):
 
     def call(self, srv_type, name, **fields):
         answer = call_service(self.spinner, self.client(srv_type, name), srv_type.Request(
-            **fields), self.timeout)
+            **fields), self.timeout, self.stop)
         if not answer.success:
             raise RuntimeError(f"{name} failed: {answer.message}")
         return answer

@@ -42,7 +42,7 @@ stop_process() {   # stop_process PID NAME: SIGINT (the nodes finalise their fil
     if [ $code != 0 ]; then echo "$name exited with $code (see $OUT/logs/$name.log)" >&2; FAILED=1; fi
 }
 stop_all() {
-    if [ -n "$CURRENT" ]; then stop_process "$CURRENT" "the running step"; CURRENT=""; fi
+    if [ -n "$CURRENT" ]; then stop_process "$CURRENT" "$CURRENT_NAME"; CURRENT=""; fi
     for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do stop_process "${PIDS[$i]}" "${NAMES[$i]}"; done
     PIDS=() NAMES=()
 }
@@ -53,7 +53,7 @@ step() {   # step NAME COMMAND...: one step with its own log, waited for (so Ctr
     local name=$1; shift
     echo "[$(date +%T)] $name" >&2
     setsid "$@" >"$OUT/logs/$name.log" 2>&1 &
-    CURRENT=$!
+    CURRENT=$! CURRENT_NAME=$name
     local code=0; wait "$CURRENT" || code=$?
     CURRENT=""
     if [ $code != 0 ]; then
