@@ -166,6 +166,15 @@ def wait_for_subscribers(publisher, count, timeout, stop):
         time.sleep(0.05)
 
 
+def wait_until_subscribed(node, topic, timeout, stop):
+    """Wait until ``topic`` has a subscriber; ServiceTimeout after ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while node.count_subscribers(topic) < 1 and not stop.is_set():
+        if time.monotonic() > deadline:
+            raise ServiceTimeout(f"{topic} has no subscriber after {timeout:g} s")
+        time.sleep(0.05)
+
+
 def call_service(executor, client, request, timeout, stop=None):
     """Call a service and wait for the answer with a ``spin_once`` loop (rclpy 7.1's
     ``spin_until_future_complete`` slows down with every call); ServiceTimeout after

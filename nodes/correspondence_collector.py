@@ -41,6 +41,8 @@ Parameters:
   ``mapping_service`` (``/lpa_mapping/fit``).
 * ``wait_for_subscribers`` (0): babble only once ``correspondences`` has this many
   subscribers (e.g. 2 for a recorder and lpa_mapping), so none misses the first pairs.
+* ``wait_for_subscribed_topics`` (string array): also wait until each of these topics has a
+  subscriber, e.g. the robots' ``joint_states``, so a recorder records from the first step.
 * ``wait_timeout`` (s, 30): how long to wait for each service (and the subscribers);
   ``call_timeout`` (s, 120): how long a single call may take (a fit on many points).
 
@@ -67,7 +69,8 @@ from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSampl
 from lpa_transfer_interfaces.srv import FitModel, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
                                           robot_stepper, run_job, sim_stamp, to_matrix,
-                                          wait_for_services, wait_for_subscribers)
+                                          wait_for_services, wait_for_subscribers,
+                                          wait_until_subscribed)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
@@ -122,6 +125,7 @@ class CorrespondenceCollector(Node):
                                                           Parameter.Type.INTEGER_ARRAY)
         self.fit_fields["random_state"] = declare("random_state", 0)
         self.wait_for_subscribers = declare("wait_for_subscribers", 0)
+        self.subscribed_topics = array_parameter(self, "wait_for_subscribed_topics")
         self.wait_timeout = float(declare("wait_timeout", 30.0))
         self.call_timeout = float(declare("call_timeout", 120.0))
         self.step_clients = {side: self.create_client(
@@ -185,6 +189,8 @@ class CorrespondenceCollector(Node):
         wait_for_services(clients, self.wait_timeout, self.stop)
         wait_for_subscribers(self.sample_pub, self.wait_for_subscribers, self.wait_timeout,
                              self.stop)
+        for topic in self.subscribed_topics:
+            wait_until_subscribed(self, topic, self.wait_timeout, self.stop)
         source, target = self.robots["source"], self.robots["target"]
         self.get_logger().info(
             f"babbling {source.name} -> {target.name}: {self.program.program}, "

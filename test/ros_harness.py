@@ -148,3 +148,12 @@ class ClientNode:
         self.executor.shutdown()
         self.node.destroy_node()
         self._rclpy.try_shutdown(context=self.context)
+
+
+def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300):
+    """Run ``<scenario_dir>/run.sh --config <config> --out <out>`` on its own ROS domain;
+    the CompletedProcess (text output captured)."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
+    return subprocess.run(["bash", str(Path(scenario_dir) / "run.sh"), "--config",
+                           str(Path(scenario_dir) / config), "--out", str(out)],
+                          env=env, capture_output=True, text=True, timeout=timeout)

@@ -2,15 +2,13 @@
 Star 1 only, 2 trials a condition; every node a real process over DDS."""
 import csv
 import json
-import os
-import subprocess
 
 import numpy as np
 import pytest
 
 from conftest import ROOT
 from lpa_transfer.bag import summary
-from ros_harness import unique_domain_id
+from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
@@ -19,10 +17,7 @@ CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("inverse_dynamics") / "run"
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    result = subprocess.run(["bash", str(SCENARIO / "run.sh"), "--config",
-                             str(SCENARIO / "smoke.yaml"), "--out", str(out)],
-                            env=env, capture_output=True, text=True, timeout=280)
+    result = run_scenario(SCENARIO, out, timeout=280)
     assert result.returncode == 0, result.stdout + result.stderr
     return out
 

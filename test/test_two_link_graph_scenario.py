@@ -11,7 +11,7 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.bag import read_messages, summary
 from lpa_transfer.model_store import ModelStore
-from ros_harness import unique_domain_id, wait_until
+from ros_harness import run_scenario, unique_domain_id, wait_until
 
 SCENARIO = ROOT / "scenarios" / "two_link_graph"
 MODEL_ID = "two_link_source->two_link_target"
@@ -22,11 +22,7 @@ NODE_LOGS = ("recorder", "lpa_mapping", "source_sim", "target_sim", "corresponde
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("graph") / "run"
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    result = subprocess.run(["bash", str(SCENARIO / "run.sh"), "--config",
-                             str(SCENARIO / "smoke.yaml"), "--out", str(out)],
-                            env=env, capture_output=True, text=True, timeout=240)
-    return out, result
+    return out, run_scenario(SCENARIO, out, timeout=240)
 
 
 def test_scenario_runs_and_stops_every_node_cleanly(smoke_run):
