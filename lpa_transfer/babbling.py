@@ -24,7 +24,7 @@ import numpy as np
 
 from . import inverse_kinematics
 from ._validation import check_int
-from .kinematics import planar_forward_kinematics
+from .kinematics import home_pose, planar_forward_kinematics
 from .serial_chain import forward_kinematics
 
 PROGRAMS = ("joint_lines", "task_lines")
@@ -49,20 +49,6 @@ class Kinematics:
     @property
     def n_joints(self):
         return len(self.joint_limits)
-
-
-def home_pose(joint_limits, positions=None):
-    """The given pose (checked to lie within the limits) or zero clipped into the limits."""
-    limits = np.asarray(joint_limits, dtype=np.float64)
-    if positions is None or len(positions) == 0:
-        return np.clip(np.zeros(len(limits)), limits[:, 0], limits[:, 1])
-    home = np.asarray(positions, dtype=np.float64)
-    if home.shape != (len(limits),) or not np.isfinite(home).all():
-        raise ValueError(f"home pose needs {len(limits)} finite joint values, got {positions}")
-    if ((home < limits[:, 0]) | (home > limits[:, 1])).any():
-        raise ValueError(f"home pose {home.tolist()} lies outside the joint limits "
-                         f"{limits.tolist()}")
-    return home
 
 
 def planar_kinematics(robot, home=None):

@@ -36,6 +36,13 @@ class PID:
                 raise ValueError(f"PID gain {name} must be finite and >= 0, got {gain}")
         self.reset()
 
+    @classmethod
+    def from_gains(cls, gains, name="pid"):
+        """A PID from a ``[kp, ki, kd]`` list (a node parameter called ``name``)."""
+        if len(gains) != 3:
+            raise ValueError(f"{name} must be [kp, ki, kd], got {list(gains)}")
+        return cls(*gains)
+
     def reset(self):
         self.integral_ = None
 

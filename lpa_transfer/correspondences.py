@@ -31,7 +31,6 @@ import numpy as np
 
 from . import inverse_kinematics
 from ._validation import check_int
-from .babbling import home_pose
 
 PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
 JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
@@ -207,7 +206,7 @@ def collect_correspondences(program, pairing_rule, source, target, step_source, 
             raise ValueError(f"task_offset needs {n_task} finite values, got {task_offset}")
     source_previous = source_start = step_source(source.home, steps_per_sample)
     target_previous = step_target(target.home, steps_per_sample)
-    target_command = home_pose(target.joint_limits, target.home)
+    target_command = target.home
     pairs_source, pairs_target, complete = [], [], True
     for index, source_command in enumerate(source_commands):
         if should_stop is not None and should_stop():
@@ -228,7 +227,6 @@ def collect_correspondences(program, pairing_rule, source, target, step_source, 
     return CorrespondenceSet(_rows(pairs_source), _rows(pairs_target), pairing_rule=pairing_rule,
                              features=features, sim_time=source_previous.time - source_start.time,
                              complete=complete)
-
 
 
 def _rows(samples):

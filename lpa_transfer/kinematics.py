@@ -41,6 +41,22 @@ def planar_forward_kinematics(q, link_lengths):
     return np.column_stack((np.cos(absolute) @ lengths, np.sin(absolute) @ lengths))
 
 
+def home_pose(joint_limits, positions=None, name="home pose"):
+    """The given pose (checked: one finite value per joint, within the limits) or, when none
+    is given, zero clipped into the limits — the pose a robot starts from (simulator, babbling).
+    ``name`` says in error messages whose pose it is."""
+    limits = np.asarray(joint_limits, dtype=np.float64)
+    if positions is None or len(positions) == 0:
+        return np.clip(np.zeros(len(limits)), limits[:, 0], limits[:, 1])
+    home = np.asarray(positions, dtype=np.float64)
+    if home.shape != (len(limits),) or not np.isfinite(home).all():
+        raise ValueError(f"{name} needs {len(limits)} finite joint values, got {positions}")
+    if ((home < limits[:, 0]) | (home > limits[:, 1])).any():
+        raise ValueError(f"{name} {home.tolist()} lies outside the joint limits "
+                         f"{limits.tolist()}")
+    return home
+
+
 def sample_joint_uniform(n_samples, joint_limits, rng):
     """``n_samples`` joint vectors (N, n) drawn uniformly in the box ``joint_limits`` (n, 2).
 

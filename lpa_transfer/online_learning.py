@@ -72,13 +72,7 @@ class FeedForwardLearner:
 
     def observe(self, sample):
         """Learn one (q, q̇, q̈, τ) sample unless it holds NaN/inf (then count it)."""
-        if not np.isfinite(sample).all():
-            self.n_rejected_ += 1
-            return False
-        n = len(sample) // 4
-        self.regressor.partial_fit(sample[None, :3 * n], sample[None, 3 * n:])
-        self.n_learned_ += 1
-        return True
+        return self.initialise(np.asarray(sample, dtype=np.float64)[None]) == 1
 
     def run_trial(self, step, state, q_d, qd_d, qdd_d, x_d, n_steps, dt):
         """Track one trial's desired joint trajectory (T, n) from ``state``.

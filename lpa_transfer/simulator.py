@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lpa_transfer.kinematics import home_pose
 from lpa_transfer.planar_chain import load_fixed_robot
 from lpa_transfer.serial_chain import serial_chain_urdf, urdf_joint_armatures
 
@@ -211,14 +212,7 @@ class RobotSimulator:
         """Put the joints at ``positions`` (default: zero clipped into the limits), at rest,
         and the clock at 0 (unless ``keep_time``: then it runs on, so that the stamps of
         what is published stay ordered); in position mode the motors then hold that pose."""
-        if positions is None or len(positions) == 0:
-            q = np.clip(np.zeros(self.n_joints), self.joint_limits[:, 0], self.joint_limits[:, 1])
-        else:
-            q = self._vector(positions, "initial positions")
-            outside = (q < self.joint_limits[:, 0]) | (q > self.joint_limits[:, 1])
-            if outside.any():
-                raise ValueError(f"initial positions {q.tolist()} outside the joint limits "
-                                 f"{self.joint_limits.tolist()}")
+        q = home_pose(self.joint_limits, positions, name="initial positions")
         p, cid = self._p, self._client
         for joint, value in zip(self._joints, q):
             p.resetJointState(self._body, joint, float(value), 0.0, physicsClientId=cid)

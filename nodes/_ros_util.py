@@ -156,22 +156,13 @@ def wait_for_services(clients, timeout, stop):
                                      f"{timeout:g} s (is its node running, in this ROS domain?)")
 
 
-def wait_for_subscribers(publisher, count, timeout, stop):
-    """Wait until ``publisher`` has ``count`` subscribers; ServiceTimeout after ``timeout`` s."""
+def wait_for_subscribers(node, topic, count, timeout, stop):
+    """Wait until ``topic`` has ``count`` subscribers; ServiceTimeout after ``timeout`` s."""
     deadline = time.monotonic() + timeout
-    while publisher.get_subscription_count() < count and not stop.is_set():
+    while node.count_subscribers(topic) < count and not stop.is_set():
         if time.monotonic() > deadline:
-            raise ServiceTimeout(f"{publisher.topic_name} has {publisher.get_subscription_count()}"
-                                 f" subscribers after {timeout:g} s, waited for {count}")
-        time.sleep(0.05)
-
-
-def wait_until_subscribed(node, topic, timeout, stop):
-    """Wait until ``topic`` has a subscriber; ServiceTimeout after ``timeout`` s."""
-    deadline = time.monotonic() + timeout
-    while node.count_subscribers(topic) < 1 and not stop.is_set():
-        if time.monotonic() > deadline:
-            raise ServiceTimeout(f"{topic} has no subscriber after {timeout:g} s")
+            raise ServiceTimeout(f"{topic} has {node.count_subscribers(topic)} subscribers "
+                                 f"after {timeout:g} s, waited for {count}")
         time.sleep(0.05)
 
 

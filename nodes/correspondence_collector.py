@@ -69,8 +69,7 @@ from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSampl
 from lpa_transfer_interfaces.srv import FitModel, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
                                           robot_stepper, run_job, sim_stamp, to_matrix,
-                                          wait_for_services, wait_for_subscribers,
-                                          wait_until_subscribed)
+                                          wait_for_services, wait_for_subscribers)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
@@ -87,15 +86,6 @@ def task_box(low, high):
     return (tuple(low), tuple(high)) if low or high else None
 
 
-def pid_of(gains, side):
-    """A PID from ``[kp, ki, kd]`` (the robot is then torque-controlled), or None."""
-    if not gains:
-        return None
-    if len(gains) != 3:
-        raise ValueError(f"{side}_pid must be [kp, ki, kd], got {gains}")
-    return PID(*gains)
-
-
 class CorrespondenceCollector(Node):
     def __init__(self, stop):
         super().__init__("correspondence_collector")
@@ -109,7 +99,9 @@ class CorrespondenceCollector(Node):
             robot_kinematics(robot, doubles(f"{side}_home") or None),
             task_box=task_box(doubles(f"{side}_task_low"), doubles(f"{side}_task_high")))
             for side, robot in self.robots.items()}
-        self.pid = {side: pid_of(doubles(f"{side}_pid"), side) for side in self.robots}
+        gains = {side: doubles(f"{side}_pid") for side in self.robots}
+        self.pid = {side: PID.from_gains(gains[side], f"{side}_pid") if gains[side] else None
+                    for side in self.robots}
         self.pairing_rule = check_pairing_rule(declare("pairing_rule", "same_command"))
         self.program = BabblingProgram(
             declare("program", "joint_lines"), declare("n_segments", 20),
@@ -187,10 +179,9 @@ class CorrespondenceCollector(Node):
     def run(self):
         clients = list(self.step_clients.values()) + ([self.fit_client] if self.model_id else [])
         wait_for_services(clients, self.wait_timeout, self.stop)
-        wait_for_subscribers(self.sample_pub, self.wait_for_subscribers, self.wait_timeout,
-                             self.stop)
-        for topic in self.subscribed_topics:
-            wait_until_subscribed(self, topic, self.wait_timeout, self.stop)
+        for topic, count in ((self.sample_pub.topic_name, self.wait_for_subscribers),
+                             *((topic, 1) for topic in self.subscribed_topics)):
+            wait_for_subscribers(self, topic, count, self.wait_timeout, self.stop)
         source, target = self.robots["source"], self.robots["target"]
         self.get_logger().info(
             f"babbling {source.name} -> {target.name}: {self.program.program}, "

@@ -68,16 +68,13 @@ class InverseDynamicsLearner(Node):
                              f"got {control_rate}")
         self.dt = 1.0 / control_rate
         self.n_steps = max(1, round(self.dt / physics_step))
-        gains = doubles("pid")
-        if len(gains) != 3:
-            raise ValueError(f"pid must be [kp, ki, kd], got {gains}")
+        pid = PID.from_gains(doubles("pid"))
         self.trajectory = self.task(doubles)
         self.regressor_spec = (declare("regressor", "lwpr"),
                                json.loads(declare("regressor_params", "{}")))
         if self.regressor_spec[0] == "lwpr":
             self.regressor_spec[1].setdefault("norm_in", input_scale(*self.trajectory[:3]))
-        self.learner = FeedForwardLearner(make_regressor(self.regressor_spec[0],
-                                                         **self.regressor_spec[1]), PID(*gains))
+        self.learner = self.fresh_learner(pid)
         self.call_timeout = float(declare("call_timeout", 30.0))
         self.wait_timeout = float(declare("wait_timeout", 30.0))
         # Robot calls happen inside service callbacks: a client node of their own, spun by
@@ -123,6 +120,11 @@ class InverseDynamicsLearner(Node):
                              f"or shrink star_radius)")
         return q[1:], qd[1:], qdd[1:], x_d
 
+    def fresh_learner(self, pid):
+        """A learner that knows nothing yet: a new regressor of the configured kind."""
+        name, hyperparameters = self.regressor_spec
+        return FeedForwardLearner(make_regressor(name, **hyperparameters), pid)
+
     def call(self, client, request):
         return call_service(self.robot_spinner, client, request, self.call_timeout)
 
@@ -132,9 +134,7 @@ class InverseDynamicsLearner(Node):
             raise ValueError(f"samples need 4 x {self.robot.n_joints} columns (q, q_dot, "
                              f"q_ddot, tau), got {samples.shape[1]}")
         if request.reset:
-            self.learner = FeedForwardLearner(make_regressor(self.regressor_spec[0],
-                                                             **self.regressor_spec[1]),
-                                              self.learner.pid)
+            self.learner = self.fresh_learner(self.learner.pid)
             self.trial = 0
         rejected_before = self.learner.n_rejected_
         response.n_learned = self.learner.initialise(samples)
@@ -143,16 +143,16 @@ class InverseDynamicsLearner(Node):
 
     def run_trials(self, request, response):
         wait_for_services([self.step_client, self.reset_client], self.wait_timeout, self.stop)
-        self.state = self.reset_robot()
+        state = self.reset_robot()
         self.learner.learn = not request.frozen
         errors, experience = [], []
         for _ in range(request.n_trials):
             if self.stop.is_set():
                 raise ValueError(f"stopped (SIGINT/SIGTERM) after {len(errors)} trials")
             learned, rejected = self.learner.n_learned_, self.learner.n_rejected_
-            trial = self.learner.run_trial(self.step, self.state, *self.trajectory,
+            trial = self.learner.run_trial(self.step, state, *self.trajectory,
                                            self.n_steps, self.dt)
-            self.state, self.trial = trial.end_state, self.trial + 1
+            state, self.trial = trial.end_state, self.trial + 1
             errors.append(trial.tracking_error)
             experience.append(trial.samples)
             self.publish(trial, self.learner.n_learned_ - learned,
@@ -160,7 +160,7 @@ class InverseDynamicsLearner(Node):
         response.tracking_errors = errors
         response.experience = to_matrix(np.vstack(experience) if experience
                                         else np.zeros((0, 4 * self.robot.n_joints)))
-        response.sim_time = self.state.time
+        response.sim_time = state.time
         return (f"{request.n_trials} trials, tracking error "
                 + ", ".join(f"{1e3 * e:.1f}" for e in errors) + " mm")
 

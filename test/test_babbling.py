@@ -4,10 +4,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import (BabblingProgram, Kinematics, home_pose, planar_kinematics,
-                                   polyline, robot_kinematics)
+from lpa_transfer.babbling import (BabblingProgram, Kinematics, planar_kinematics, polyline,
+                                   robot_kinematics)
 from lpa_transfer.inverse_kinematics import solve_path
-from lpa_transfer.kinematics import planar_forward_kinematics
+from lpa_transfer.kinematics import home_pose, planar_forward_kinematics
 from two_link import elbow_ik, robot
 
 TWO_LINK = ("two_link_source", "two_link_target")

@@ -73,6 +73,9 @@ def test_pid_terms():
     assert pid.torque([1.0], [0.0], np.array([0.0]), np.array([0.0]), 0.1) == pytest.approx([3.0])
     with pytest.raises(ValueError, match="kd must be finite and >= 0"):
         PID(1.0, 0.0, -1.0)
+    assert PID.from_gains([2.0, 10.0, 0.5]).kp == 2.0
+    with pytest.raises(ValueError, match=r"target_pid must be \[kp, ki, kd\], got \[1.0\]"):
+        PID.from_gains([1.0], "target_pid")
 
 
 def test_pid_servo_drives_a_torque_mode_robot_to_position_commands():

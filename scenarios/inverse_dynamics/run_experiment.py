@@ -75,8 +75,8 @@ class Experiment(Node):
         self.spinner.add_node(self)
         self.service_clients = {}
         self.traces = {}
-        self.create_subscription(TrialResult, "/youbot/trial_result", self.on_trial, 50)
-        self.create_subscription(TrialResult, "/pincher/trial_result", self.on_trial, 50)
+        for robot in self.robots:
+            self.create_subscription(TrialResult, f"/{robot}/trial_result", self.on_trial, 50)
         self.recording = None
         self.done_seeds = []
 
