@@ -69,6 +69,21 @@ def check_task_box(low, high):
     return low, high
 
 
+def box_around(kinematics, halfwidth):
+    """The task box (low, high) centred on the end effector at ``kinematics.home``, reaching
+    ``halfwidth`` (m, one value per task coordinate; 0 keeps a coordinate fixed) either side:
+    babbling "in the vicinity" of a task (§5.5.3), e.g. around a star's centre. Robots of
+    different sizes babbling with one seed in boxes scaled like their tasks move through
+    corresponding places of their tasks."""
+    centre = kinematics.forward(kinematics.home[None])[0]
+    halfwidth = np.asarray(halfwidth, dtype=np.float64)
+    if halfwidth.shape != centre.shape or not np.isfinite(halfwidth).all() \
+            or (halfwidth < 0).any():
+        raise ValueError(f"the half-width needs {len(centre)} finite values >= 0 (one per "
+                         f"task coordinate), got {halfwidth.tolist()}")
+    return tuple(centre - halfwidth), tuple(centre + halfwidth)
+
+
 def robot_kinematics(robot, home=None):
     """:class:`Kinematics` of any robot file: planar chains in (x, y)
     (:func:`planar_kinematics`), serial chains in world (x, y, z)

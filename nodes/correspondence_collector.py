@@ -28,6 +28,10 @@ Parameters:
   ``source_task_low``/``source_task_high`` and ``target_task_*``: each robot's own box for
   task_lines (robots of different sizes babble in their own workspaces, §5.4.1; the same
   seed puts the waypoints at the same relative places).
+* ``source_task_halfwidth``, ``target_task_halfwidth`` (m, one value per task coordinate):
+  instead of ``*_task_low``/``*_task_high``, babble in the box of this half-width around the
+  end effector at ``*_home`` — "in the vicinity" of a task centred there (§5.5.3,
+  :func:`lpa_transfer.babbling.box_around`).
 * ``source_pid``, ``target_pid`` (double arrays ``[kp, ki, kd]``, default empty): set for a
   robot_sim in torque mode; the robot then tracks the babbling commands with this PID
   (:class:`lpa_transfer.control.PIDServo`), as §5.4.1 collects inverse-dynamics data.
@@ -60,7 +64,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from lpa_transfer.babbling import BabblingProgram, robot_kinematics
+from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
 from lpa_transfer.control import PID, start_servo
 from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
                                           collect_correspondences)
@@ -81,8 +85,12 @@ def required_path(value, name):
     return os.path.expanduser(value)
 
 
-def task_box(low, high):
+def task_box(kinematics, low, high, halfwidth, side):
     """A robot's own task-space babbling box, or None (then the program's box is used)."""
+    if halfwidth and (low or high):
+        raise ValueError(f"give {side}_task_halfwidth or {side}_task_low/high, not both")
+    if halfwidth:
+        return box_around(kinematics, halfwidth)
     return (tuple(low), tuple(high)) if low or high else None
 
 
@@ -95,10 +103,12 @@ class CorrespondenceCollector(Node):
         self.robots = {side: load_robot_params(required_path(declare(f"{side}_robot", ""),
                                                              f"{side}_robot"))
                        for side in ("source", "target")}
-        self.kinematics = {side: dataclasses.replace(
-            robot_kinematics(robot, doubles(f"{side}_home") or None),
-            task_box=task_box(doubles(f"{side}_task_low"), doubles(f"{side}_task_high")))
-            for side, robot in self.robots.items()}
+        self.kinematics = {}
+        for side, robot in self.robots.items():
+            kinematics = robot_kinematics(robot, doubles(f"{side}_home") or None)
+            self.kinematics[side] = dataclasses.replace(kinematics, task_box=task_box(
+                kinematics, doubles(f"{side}_task_low"), doubles(f"{side}_task_high"),
+                doubles(f"{side}_task_halfwidth"), side))
         gains = {side: doubles(f"{side}_pid") for side in self.robots}
         self.pid = {side: PID.from_gains(gains[side], f"{side}_pid") if gains[side] else None
                     for side in self.robots}

@@ -4,8 +4,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import (BabblingProgram, Kinematics, planar_kinematics, polyline,
-                                   robot_kinematics)
+from lpa_transfer.babbling import (BabblingProgram, Kinematics, box_around, planar_kinematics,
+                                   polyline, robot_kinematics)
 from lpa_transfer.inverse_kinematics import solve_path
 from lpa_transfer.kinematics import home_pose, planar_forward_kinematics
 from two_link import elbow_ik, robot
@@ -243,6 +243,26 @@ def test_task_lines_use_each_robots_own_box():
     points = program.task_points(k.forward(k.home[None])[0], k.task_box)
     assert ((points[2::3] >= large[0]) & (points[2::3] <= large[1])).all()
     assert program.commands(k).shape == (18, 2)
+
+
+def test_box_around_the_home_end_effector():
+    """§5.5.3 'vicinity' boxes: centred on the home pose's end effector; two robots babbling
+    one seed in boxes scaled like their tasks visit the same task-relative places."""
+    small = robot_kinematics(robot("pincher_arm"), [0.0, 0.3, 1.0, 0.8])
+    large = robot_kinematics(robot("youbot_arm"), [0.0, 0.0, 1.2, 0.8, 0.0])
+    boxes = [box_around(small, [0.05, 0.05, 0.0]), box_around(large, [0.1, 0.1, 0.0])]
+    for k, (low, high) in zip((small, large), boxes):
+        centre = k.forward(k.home[None])[0]
+        np.testing.assert_allclose((np.add(low, high)) / 2, centre)
+        assert low[2] == high[2] == centre[2]
+    program = BabblingProgram("task_lines", 5, 4, seed=3)
+    relative = [(program.task_waypoints(box) - k.forward(k.home[None])[0]) / scale
+                for k, box, scale in zip((small, large), boxes, (0.05, 0.1))]
+    np.testing.assert_allclose(relative[0], relative[1], atol=1e-12)
+    assert np.abs(relative[0][:, :2]).max() <= 1 and (relative[0][:, 2] == 0).all()
+    for bad in ([0.1, 0.1], [0.1, -0.1, 0.0], [np.nan, 0.1, 0.0]):
+        with pytest.raises(ValueError, match="half-width needs 3 finite values"):
+            box_around(small, bad)
 
 
 def test_robot_kinematics_of_a_serial_arm_is_its_3d_forward_kinematics():

@@ -187,11 +187,17 @@ def test_missing_robot_service_is_a_clear_error(tmp_path):
     assert "/source/robot_sim/step is not available after 1 s" in collector.log()
 
 
-def test_bad_parameters_are_a_clear_error(tmp_path):
+@pytest.mark.parametrize("params, message", [
+    (dict(pairing_rule="same_colour"), "pairing_rule must be one of"),
+    (dict(source_task_halfwidth="[0.1, 0.1]", source_task_low="[0.0, 0.0]",
+          source_task_high="[0.1, 0.1]"), "give source_task_halfwidth or source_task_low/high"),
+    (dict(target_task_halfwidth="[0.1, -0.1]"), "half-width needs 2 finite values >= 0"),
+])
+def test_bad_parameters_are_a_clear_error(tmp_path, params, message):
     collector = NodeProcess("correspondence_collector", unique_domain_id(), tmp_path,
-                            collector_params(pairing_rule="same_colour", wait_timeout=1.0))
+                            collector_params(wait_timeout=1.0, **params))
     assert run_to_end(collector, timeout=30) == 1
-    assert "pairing_rule must be one of" in collector.log()
+    assert message in collector.log()
 
 
 def test_torque_mode_pid_tracking_of_task_lines_equals_the_library(tmp_path):

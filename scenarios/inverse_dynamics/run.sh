@@ -4,9 +4,12 @@
 # robot and star), with and without transfer of the other robot's experience through
 # lpa_mapping. Every node is its own process with its own log; everything is recorded.
 #
-# Usage: scenarios/inverse_dynamics/run.sh [--config FILE.yaml] [--out DIR]
-#   defaults: scenarios/inverse_dynamics/config.yaml, runs/inverse_dynamics
-# Leaves in DIR: run.mcap, pairs_<seed>.npz, models/, logs/, results.json,
+# Usage: scenarios/inverse_dynamics/run.sh [--config FILE.yaml] [--override FILE.yaml]...
+#                                          [--out DIR]
+#   defaults: scenarios/inverse_dynamics/config.yaml, runs/inverse_dynamics; an override file
+#   changes some parameters (e.g. experiment seeds: [3, 4] to run a share of the seeds;
+#   merge_results.py joins the shares' results).
+# Leaves in DIR: run.mcap, pairs_<seed>_<star>.npz, models/, logs/, results.json,
 # learning_curves.csv, the figures and report.txt.
 set -euo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -16,8 +19,18 @@ OUT=$ROOT/runs/inverse_dynamics
 SCENARIO=inverse_dynamics
 source "$ROOT/scenarios/lib/graph.sh"
 
-SEEDS=$(python -c "import sys, yaml
-print(*yaml.safe_load(open(sys.argv[1]))['experiment']['ros__parameters']['seeds'])" "$CONFIG")
+experiment_list() {   # a list parameter of the experiment node (the last file setting it wins)
+    python - "$1" "${CONFIGS[@]}" <<'PY'
+import sys, yaml
+key, value = sys.argv[1], None
+for path in sys.argv[2:]:
+    value = (yaml.safe_load(open(path)).get("experiment") or {}).get(
+        "ros__parameters", {}).get(key, value)
+print(*value)
+PY
+}
+SEEDS=$(experiment_list seeds)
+STARS=$(experiment_list stars)
 START=$(date +%s.%N)
 start recorder recorder "${PARAMS[@]}" -p "output:=$OUT/run.mcap"
 start lpa_mapping lpa_mapping "${PARAMS[@]}" -p "model_dir:=$OUT/models"
@@ -29,10 +42,16 @@ for robot in youbot pincher; do
     done
 done
 PAIRS=()
-for seed in $SEEDS; do
-    step "correspondence_collector_seed$seed" python -m lpa_transfer_nodes.correspondence_collector \
-        "${PARAMS[@]}" -p "seed:=$seed" -p "output:=$OUT/pairs_$seed.npz"
-    PAIRS+=("$OUT/pairs_$seed.npz")
+for seed in $SEEDS; do     # babbling in the vicinity of each star (config: /babbling/*)
+    k=0
+    for star in $STARS; do
+        step "babbling_seed${seed}_$star" python -m lpa_transfer_nodes.correspondence_collector \
+            "${PARAMS[@]}" -r __ns:=/babbling -r "__node:=$star" \
+            -r correspondences:=/correspondences -r correspondence_batch:=/correspondence_batch \
+            -p "seed:=$((10 * seed + k))" -p "output:=$OUT/pairs_${seed}_$star.npz"
+        PAIRS+=("$OUT/pairs_${seed}_$star.npz")
+        k=$((k + 1))
+    done
 done
 step experiment python "$HERE/run_experiment.py" "${PAIRS[@]}" "${PARAMS[@]}" \
     -p "output_dir:=$OUT"

@@ -3,8 +3,9 @@
 
 Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML); the robot
 simulators, one ``inverse_dynamics_learner`` per robot and star, ``lpa_mapping`` and the
-recorder are running, and correspondence_collector has saved ``pairs_<seed>.npz`` (source =
-the first robot of ``robots``) for every seed.
+recorder are running, and correspondence_collector has saved the pairs of every seed (source
+= the first robot of ``robots``): one file per star, babbled in the star's vicinity, given
+seed by seed in the order of ``seeds``; a seed's files are joined.
 
 For every seed: PA and LPA models in both directions from that seed's correspondences, fitted
 by the mapping service. For every target robot and star, the conditions of §5.5.3, each a
@@ -46,6 +47,7 @@ from lpa_transfer_nodes._ros_util import (call_service, from_matrix, run_job,  #
                                           to_matrix, wait_for_services)
 
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
+SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds")  # in results.json
 TRIAL_SECONDS = 8.4
 THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
                     "63% of training time saved (random init: 4.6%)",
@@ -146,9 +148,12 @@ class Experiment(Node):
                 scratch[robot, star, "errors"] = errors
                 self.traces[robot, star] = [_trace(messages[0]), _trace(messages[-1])]
                 self.get_logger().info(f"{robot} {star} from scratch: {_mm(errors)}")
-        for seed, path in zip(self.seeds, pair_files):
-            source_side, target_side = load_correspondences(path)
-            pairs = dict(zip(self.robots, (source_side, target_side)))
+        per_seed = len(pair_files) // len(self.seeds)
+        for index, seed in enumerate(self.seeds):
+            sides = [load_correspondences(path)
+                     for path in pair_files[index * per_seed:(index + 1) * per_seed]]
+            pairs = {robot: np.vstack([side[k] for side in sides])
+                     for k, robot in enumerate(self.robots)}
             self.fit_models(seed, pairs)
             for target in self.robots:
                 source = next(r for r in self.robots if r != target)
@@ -212,6 +217,7 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds):
 def write_outputs(curves, traces, experiment, out):
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({
+        "settings": {key: getattr(experiment, key) for key in SETTINGS},
         "curves_m": curves, "seeds": experiment.done_seeds,
         "traces": {f"{r}/{s}": t for (r, s), t in traces.items()}}) + "\n")
     with open(out / "learning_curves.csv", "w", newline="") as handle:
@@ -292,9 +298,9 @@ def main(args=None):
     start = time.perf_counter()
 
     def experiment(node):
-        if len(pair_files) != len(node.seeds):
-            raise ValueError(f"give one correspondence file per seed ({node.seeds}), got "
-                             f"{pair_files}")
+        if not pair_files or len(pair_files) % len(node.seeds):
+            raise ValueError(f"give the same number of correspondence files for every seed "
+                             f"({node.seeds}), got {pair_files}")
         return node.run(pair_files)
 
     node, curves = run_job("experiment", Experiment, experiment,

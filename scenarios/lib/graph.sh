@@ -1,14 +1,19 @@
 # Shared by the scenarios' run.sh scripts (source it after setting HERE, ROOT, CONFIG, OUT
 # and SCENARIO, a name): argument parsing, the run directory, the ROS environment, and
 # starting/stopping every node as its own process with its own log.
-# Sets PARAMS (--ros-args --params-file CONFIG); provides start, step, stop_all.
+# Sets PARAMS (--ros-args --params-file CONFIG [--params-file OVERRIDE]...) and CONFIGS (the
+# files in that order: later ones override); provides start, step, stop_all.
+OVERRIDES=()
 while [ $# -gt 0 ]; do
     case $1 in
         --config) CONFIG=$(realpath "$2"); shift 2 ;;
+        --override) OVERRIDES+=("$(realpath "$2")"); shift 2 ;;
         --out) OUT=$(realpath -m "$2"); shift 2 ;;
-        *) echo "usage: $0 [--config FILE.yaml] [--out DIR]" >&2; exit 2 ;;
+        *) echo "usage: $0 [--config FILE.yaml] [--override FILE.yaml]... [--out DIR]" >&2
+           exit 2 ;;
     esac
 done
+CONFIGS=("$CONFIG" "${OVERRIDES[@]}")
 
 # A run directory holds one run: refuse to clear a directory this script did not make.
 if [ -d "$OUT" ] && [ -n "$(ls -A "$OUT")" ] && [ ! -e "$OUT/.${SCENARIO}_run" ]; then
@@ -18,7 +23,8 @@ rm -rf "$OUT"; mkdir -p "$OUT/logs"; touch "$OUT/.${SCENARIO}_run"
 source "$ROOT/tools/env.sh"
 export ROS_LOG_DIR=$OUT/logs/ros PYTHONUNBUFFERED=1
 cd "$ROOT"
-PARAMS=(--ros-args --params-file "$CONFIG")
+PARAMS=(--ros-args)
+for file in "${CONFIGS[@]}"; do PARAMS+=(--params-file "$file"); done
 
 # Every process gets its own session (setsid), so Ctrl-C reaches only this script, which then
 # stops them in order: the running step first, then the nodes in reverse start order, the

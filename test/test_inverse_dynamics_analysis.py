@@ -1,0 +1,73 @@
+"""The chapter 5 experiment's analysis: trials to convergence, time saved, joining runs."""
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+pytest.importorskip("rclpy")
+sys.path.insert(0, str(ROOT / "scenarios" / "inverse_dynamics"))
+from merge_results import main as merge_main, merge  # noqa: E402
+from run_experiment import (CONDITIONS, TRIAL_SECONDS, convergence_table,  # noqa: E402
+                            trials_to_convergence)
+
+SETTINGS = {"robots": ["a", "b"], "stars": ["star1"], "n_trials": 3, "tolerance": 0.1,
+            "babbling_seconds": 2.0}
+
+
+def test_trials_to_convergence_is_the_first_trial_that_stays_within_the_tolerance():
+    assert trials_to_convergence([5.0, 1.05, 1.0], 1.0, 0.1) == 2
+    assert trials_to_convergence([5.0, 1.05, 2.0, 1.0], 1.0, 0.1) == 4   # a relapse counts
+    assert trials_to_convergence([1.0, 1.0], 1.0, 0.1) == 1
+    assert trials_to_convergence([3.0, 2.0], 1.0, 0.1) == 3              # never: n + 1
+
+
+def test_time_saved_counts_trials_and_babbling_like_the_thesis():
+    curves = {"a/star1/uninitialised": [[4.0, 2.0, 1.0]], "a/star1/random": [[1.0, 1.0, 1.0]],
+              "a/star1/transfer-PA": [[2.0, 1.0, 1.0]], "a/star1/transfer-LPA": [[3.0, 3.0, 3.0]]}
+    rows, savings = convergence_table(curves, ["a"], ["star1"], 0.1, 2.0)
+    assert [row[3] for row in rows] == [3, 1, 2, 4]
+    scratch = 3 * TRIAL_SECONDS
+    assert savings["a"]["random"] == pytest.approx(1 - (TRIAL_SECONDS + 2.0) / scratch)
+    assert savings["a"]["transfer-LPA"] < 0      # slower than learning from scratch
+
+
+def write_run(path, seeds, offset, settings=SETTINGS):
+    curves = {f"{robot}/star1/{condition}": [[offset + seed + trial for trial in (3, 2, 1)]
+                                             for seed in seeds]
+              for robot in settings["robots"] for condition in CONDITIONS}
+    trace = {"trial": 1, "desired": [[0.0, 0.0], [1.0, 1.0]], "actual": [[0.0, 0.1], [1.0, 0.9]]}
+    path.mkdir()
+    (path / "results.json").write_text(json.dumps({
+        "settings": settings, "curves_m": curves, "seeds": seeds,
+        "traces": {f"{robot}/star1": [trace, dict(trace, trial=3)]
+                   for robot in settings["robots"]}}))
+    return curves
+
+
+def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
+    first = write_run(tmp_path / "a", [0, 2], 0.0)
+    second = write_run(tmp_path / "b", [1], 10.0)
+    curves, traces, experiment = merge([tmp_path / "a", tmp_path / "b"])
+    assert experiment.done_seeds == [0, 2, 1] and experiment.n_trials == 3
+    for key, runs in curves.items():
+        assert runs == first[key] + second[key]
+    assert merge_main(["merge", str(tmp_path / "all"), str(tmp_path / "a"),
+                       str(tmp_path / "b")]) == 0
+    merged = json.loads((tmp_path / "all" / "results.json").read_text())
+    assert merged["seeds"] == [0, 2, 1] and merged["settings"] == SETTINGS
+    assert "3 seed(s)" in (tmp_path / "all" / "report.txt").read_text()
+    for name in ("learning_curves.csv", "fig5_7_5_8_learning_curves.png", "fig5_6_traces.png"):
+        assert (tmp_path / "all" / name).stat().st_size > 0
+
+
+def test_merging_refuses_repeated_seeds_and_other_settings(tmp_path):
+    write_run(tmp_path / "a", [0, 1], 0.0)
+    write_run(tmp_path / "b", [1], 0.0)
+    write_run(tmp_path / "c", [5], 0.0, dict(SETTINGS, n_trials=4))
+    with pytest.raises(ValueError, match="a seed appears in more than one run"):
+        merge([tmp_path / "a", tmp_path / "b"])
+    with pytest.raises(ValueError, match="ran other settings"):
+        merge([tmp_path / "a", tmp_path / "c"])
