@@ -150,10 +150,13 @@ class ClientNode:
         self._rclpy.try_shutdown(context=self.context)
 
 
-def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300):
-    """Run ``<scenario_dir>/run.sh --config <config> --out <out>`` on its own ROS domain;
-    the CompletedProcess (text output captured)."""
+def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=()):
+    """Run ``<scenario_dir>/run.sh --config <config> [--override <file>]... --out <out>`` on
+    its own ROS domain (files relative to the scenario); the CompletedProcess (text output
+    captured)."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    return subprocess.run(["bash", str(Path(scenario_dir) / "run.sh"), "--config",
-                           str(Path(scenario_dir) / config), "--out", str(out)],
+    args = ["--config", str(Path(scenario_dir) / config)]
+    for override in overrides:
+        args += ["--override", str(Path(scenario_dir) / override)]
+    return subprocess.run(["bash", str(Path(scenario_dir) / "run.sh"), *args, "--out", str(out)],
                           env=env, capture_output=True, text=True, timeout=timeout)

@@ -1,5 +1,6 @@
-"""The chapter 5 graph scenario (scenarios/inverse_dynamics/run.sh), small config: 1 seed,
-Star 1 only, 2 trials a condition; every node a real process over DDS."""
+"""The chapter 5 graph scenario (scenarios/inverse_dynamics/run.sh) with the smoke.yaml
+override: 1 seed, Star 1 only, 2 trials a condition; every node a real process over DDS.
+youBot <-> Pincher (config.yaml), and youBot <-> 2-link arm (5 and 2 joints)."""
 import csv
 import json
 
@@ -19,7 +20,7 @@ CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("inverse_dynamics") / "run"
-    result = run_scenario(SCENARIO, out, timeout=280)
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=280, overrides=["smoke.yaml"])
     assert result.returncode == 0, result.stdout + result.stderr
     return out
 
@@ -64,4 +65,23 @@ def test_outputs_and_bag(smoke_run):
     offsets = np.abs(forward_kinematics(youbot, source_q) - centre)
     assert offsets[:, :2].max() < 0.18 and offsets[:, :2].max() > 0.05
     models = sorted(p.name for p in (smoke_run / "models").iterdir())
+    assert len(models) == 4
+
+
+def test_transfer_between_arms_with_5_and_2_joints(tmp_path):
+    """youbot_two_link.yaml: the same graph with a planar 2-link arm (2-D task space)."""
+    out = tmp_path / "run"
+    result = run_scenario(SCENARIO, out, "youbot_two_link.yaml", timeout=280,
+                          overrides=["smoke.yaml"])
+    assert result.returncode == 0, result.stdout + result.stderr
+    curves = json.loads((out / "results.json").read_text())["curves_m"]
+    for robot in ("youbot", "two_link"):
+        for condition in CONDITIONS:
+            runs = np.asarray(curves[f"{robot}/star1/{condition}"])
+            assert runs.shape == (1, 2) and np.isfinite(runs).all() and (runs > 0).all()
+        scratch = curves[f"{robot}/star1/uninitialised"][0]
+        assert scratch[1] < scratch[0]
+    with np.load(out / "pairs_0_star1.npz") as pairs:      # (q, q̇, q̈, τ) of 5 and 2 joints
+        assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 8)
+    models = sorted(p.name for p in (out / "models").iterdir())
     assert len(models) == 4

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Thesis ch. 5 over the ROS 2 node graph: a youBot and a Pincher arm (torque-controlled
-# robot_sim nodes) learn two 'star' tracking tasks online (one inverse_dynamics_learner per
-# robot and star), with and without transfer of the other robot's experience through
-# lpa_mapping. Every node is its own process with its own log; everything is recorded.
+# Thesis ch. 5 over the ROS 2 node graph: two robots (torque-controlled robot_sim nodes; a
+# youBot and a Pincher arm in config.yaml, the youBot and a 3-DoF or 2-link arm in
+# youbot_three_dof.yaml / youbot_two_link.yaml) learn two 'star' tracking tasks online (one
+# inverse_dynamics_learner per robot and star), with and without transfer of the other
+# robot's experience through lpa_mapping. Every node is its own process with its own log;
+# everything is recorded. The robots and stars are the experiment node's parameters.
 #
 # Usage: scenarios/inverse_dynamics/run.sh [--config FILE.yaml] [--override FILE.yaml]...
 #                                          [--out DIR]
@@ -34,9 +36,9 @@ STARS=$(experiment_list stars)
 START=$(date +%s.%N)
 start recorder recorder "${PARAMS[@]}" -p "output:=$OUT/run.mcap"
 start lpa_mapping lpa_mapping "${PARAMS[@]}" -p "model_dir:=$OUT/models"
-for robot in youbot pincher; do
+for robot in $(experiment_list robots); do
     start "${robot}_sim" robot_sim "${PARAMS[@]}" -r "__ns:=/$robot"
-    for star in star1 star2; do
+    for star in $STARS; do
         start "${robot}_${star}" inverse_dynamics_learner "${PARAMS[@]}" -r "__ns:=/$robot" \
             -r "__node:=$star"
     done

@@ -214,6 +214,15 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds):
     return rows, savings
 
 
+def simulated_seconds(curves, experiment):
+    """Simulated time per robot: its trials (learning from scratch runs once, whatever the
+    number of seeds) and the babbling of every seed."""
+    trials = sum(len(runs[0]) if key.endswith("/uninitialised") else sum(map(len, runs))
+                 for key, runs in curves.items() if runs)
+    return (trials * TRIAL_SECONDS / len(experiment.robots)
+            + len(experiment.done_seeds) * experiment.babbling_seconds)
+
+
 def write_outputs(curves, traces, experiment, out):
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({
@@ -244,6 +253,9 @@ def write_outputs(curves, traces, experiment, out):
                      f"{experiment.babbling_seconds:g} s babbling for initialised runs): "
                      + ", ".join(f"{c} {100 * v:.1f}%" for c, v in saved.items()))
         lines.append(f"  thesis: {THESIS.get(robot, '-')}")
+    lines.append("")
+    lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
+                 f"{TRIAL_SECONDS} s, learning from scratch once, plus the babbling)")
     text = "\n".join(lines) + "\n"
     (out / "report.txt").write_text(text)
     return text
