@@ -22,6 +22,8 @@ def test_trials_to_convergence_is_the_first_trial_that_stays_within_the_toleranc
     assert trials_to_convergence([5.0, 1.05, 2.0, 1.0], 1.0, 0.1) == 4   # a relapse counts
     assert trials_to_convergence([1.0, 1.0], 1.0, 0.1) == 1
     assert trials_to_convergence([3.0, 2.0], 1.0, 0.1) == 3              # never: n + 1
+    assert trials_to_convergence([5.0, 1.05, 2.0, 1.0], 1.0, 0.1, stay=False) == 2
+    assert trials_to_convergence([3.0, 2.0], 1.0, 0.1, stay=False) == 3
 
 
 def test_time_saved_counts_trials_and_babbling_like_the_thesis():
