@@ -4,7 +4,8 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.kinematics import domain_data, sample_joint_uniform
+from lpa_transfer.babbling import Kinematics
+from lpa_transfer.kinematics import domain_data, planar_forward_kinematics, sample_joint_uniform
 
 SOURCE_LINKS, TARGET_LINKS = (0.3, 0.25), (0.6, 0.2)
 JOINT_LIMITS = [(0.0, np.pi / 2), (0.0, np.pi)]
@@ -48,3 +49,18 @@ def elbow_ik(points, links, joint_limits=JOINT_LIMITS):
         reachable = (np.abs(cos_q2) <= 1) & ((q >= limits[:, 0] - tolerance)
                                              & (q <= limits[:, 1] + tolerance)).all(axis=1)
     return q, reachable
+
+
+# -- the 2-link arms of the goal-babbling experiment (thesis Table 6.1) -------------------------
+#: Table 6.1: link lengths (m) and the joint limits (rad) both arms share.
+SOURCE_LINKS, TARGET_LINKS = (0.5, 0.5), (0.7, 0.4)
+TABLE_6_1_LIMITS = np.array([(-np.pi / 2, 0.0), (0.4, 2.9)])
+HOME = TABLE_6_1_LIMITS.mean(axis=1)   # our choice: the middle of the ranges
+#: the target's task box (bounding box of its workspace, rounded out)
+TARGET_BOUNDS = ((0.1, -1.1), (1.1, 0.4))
+
+
+def table_6_1_arm(links, home=HOME):
+    """A Table 6.1 arm as a Kinematics (the environment goal babbling explores)."""
+    return Kinematics(TABLE_6_1_LIMITS, np.asarray(home, dtype=np.float64),
+                      lambda q: planar_forward_kinematics(q, links))

@@ -1,0 +1,102 @@
+"""Guided exploration: correspondences for transferring sensorimotor data (thesis §6.4, Alg. 7;
+no rclpy).
+
+The source robot Ω_s and the target robot Ω_t share d_c ≤ min(d_s, d_t) joints (the motor
+subspace Q̄, e.g. Nao's and Poppy's four common arm joints, §6.5.2). The target explores for
+T_guided with goal babbling (Alg. 6) moving only those joints, the others held at its home
+values; the source then executes the same sequence of shared commands q̄ on its own body,
+its other joints at its home (Alg. 7). Pairing the two by command gives the correspondences
+{(q̄, x_s)} and {(q̄, x_t)} in R^{d_c + m} from which a domain mapping f is learned (§6.4.1).
+
+The shared commands are explored within the intersection of both robots' ranges of the
+shared joints, so that both bodies can execute every command exactly (the pairs then really
+share q̄). Transferred source data hold only the d_c shared joints; :func:`pad_transferred`
+completes them with the target's home values for the joints the source lacks (§6.4.1).
+"""
+import numpy as np
+
+from . import _validation as check
+from .babbling import Kinematics
+
+
+def check_joints(joints, n_joints, name="shared_joints"):
+    """``joints`` as an int array of distinct indices in [0, n_joints); ValueError if not."""
+    indices = np.asarray(joints)
+    if indices.ndim != 1 or indices.size == 0 or not np.issubdtype(indices.dtype, np.integer):
+        raise ValueError(f"{name} must be a non-empty 1-D sequence of joint indices, got "
+                         f"{joints!r}")
+    if len(np.unique(indices)) != len(indices) or indices.min() < 0 or indices.max() >= n_joints:
+        raise ValueError(f"{name} must hold distinct joint indices in [0, {n_joints}), got "
+                         f"{indices.tolist()}")
+    return indices
+
+
+def pad_transferred(q_shared, home, shared_joints):
+    """Commands (N, d_t) for all the target's joints: ``q_shared`` (N, d_c) in the columns
+    ``shared_joints``, the target's ``home`` (d_t,) values in the others (§6.4.1)."""
+    home = np.asarray(home, dtype=np.float64)
+    if home.ndim != 1 or not np.isfinite(home).all():
+        raise ValueError(f"home must be a 1-D array of finite joint values, got {home.tolist()}")
+    shared_joints = check_joints(shared_joints, len(home))
+    q_shared = check.as_matrix(q_shared, "q_shared")
+    if q_shared.shape[1] != len(shared_joints):
+        raise ValueError(f"q_shared has {q_shared.shape[1]} columns but {len(shared_joints)} "
+                         f"shared joints are given")
+    full = np.tile(home, (len(q_shared), 1))
+    full[:, shared_joints] = q_shared
+    return full
+
+
+def restrict(robot, joints, joint_limits=None):
+    """The robot (a Kinematics) seen through its ``joints`` only: commands (N, len(joints)),
+    the other joints held at home. ``joint_limits`` (len(joints), 2) narrows the ranges
+    (default: the robot's own); the home is clipped into them."""
+    joints = check_joints(joints, robot.n_joints, "joints")
+    limits = np.asarray(robot.joint_limits, dtype=np.float64)[joints]
+    if joint_limits is not None:
+        given = np.asarray(joint_limits, dtype=np.float64)
+        if given.shape != limits.shape or not np.isfinite(given).all() \
+                or (given[:, 0] > given[:, 1]).any():
+            raise ValueError(f"joint_limits must be {len(joints)} finite (lower, upper) pairs "
+                             f"with lower <= upper, got {given.tolist()}")
+        limits = given
+    home = np.asarray(robot.home, dtype=np.float64)
+    return Kinematics(limits, np.clip(home[joints], limits[:, 0], limits[:, 1]),
+                      lambda q: robot.forward(pad_transferred(q, home, joints)), robot.task_box)
+
+
+def shared_limits(source, target, source_joints, target_joints):
+    """(d_c, 2) intersection of the ranges of the shared joints (source_joints[i] of the
+    source corresponds to target_joints[i] of the target); ValueError if one is empty."""
+    source_joints = check_joints(source_joints, source.n_joints, "source_joints")
+    target_joints = check_joints(target_joints, target.n_joints, "target_joints")
+    if len(source_joints) != len(target_joints):
+        raise ValueError(f"source_joints and target_joints must pair the shared joints one to "
+                         f"one, got {len(source_joints)} and {len(target_joints)}")
+    source_limits = np.asarray(source.joint_limits, dtype=np.float64)[source_joints]
+    target_limits = np.asarray(target.joint_limits, dtype=np.float64)[target_joints]
+    lower = np.maximum(source_limits[:, 0], target_limits[:, 0])
+    upper = np.minimum(source_limits[:, 1], target_limits[:, 1])
+    if (lower > upper).any():
+        raise ValueError(f"the shared joints' ranges do not overlap (lower {lower.tolist()}, "
+                         f"upper {upper.tolist()})")
+    return np.column_stack((lower, upper))
+
+
+def guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
+                       model=None):
+    """Alg. 7 with the target's goal babbling: ``(source_pairs, target_pairs)``, each
+    (N, d_c + m) rows (q̄, x) with the same q̄ in row i of both.
+
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
+    target's task space, its ``home`` None or over the shared joints); it explores the target
+    restricted to ``target_joints`` for ``seconds`` simulated seconds, learning ``model``
+    (default: a fresh one; afterwards ``babbling.model_``). The source then executes the
+    commands with its ``source_joints``.
+    """
+    limits = shared_limits(source, target, source_joints, target_joints)
+    babbling.start(restrict(target, target_joints, limits), model)
+    commands, target_points = babbling.run_for(seconds)
+    source_points = np.asarray(restrict(source, source_joints, limits).forward(commands),
+                               dtype=np.float64)
+    return np.hstack((commands, source_points)), np.hstack((commands, target_points))
