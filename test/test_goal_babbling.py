@@ -10,11 +10,11 @@ from lpa_transfer.goal_babbling import (ExplorationNoise, GoalBabbling, check_x_
                                         subtargets)
 from lpa_transfer.kinematics import planar_forward_kinematics
 from lpa_transfer.reaching import evaluate_reaching, evaluation_points
-from two_link import HOME, TABLE_6_1_LIMITS, TARGET_BOUNDS, TARGET_LINKS, table_6_1_arm
+from two_link import GB_HOME, TABLE_6_1_LIMITS, GB_TARGET_BOUNDS, GB_TARGET_LINKS, table_6_1_arm
 
 def babble(seed, n_steps, **hyperparameters):
-    babbler = GoalBabbling(TARGET_BOUNDS, seed=seed, **hyperparameters)
-    commands, positions = babbler.start(table_6_1_arm(TARGET_LINKS)).run(n_steps)
+    babbler = GoalBabbling(GB_TARGET_BOUNDS, seed=seed, **hyperparameters)
+    commands, positions = babbler.start(table_6_1_arm(GB_TARGET_LINKS)).run(n_steps)
     return babbler, commands, positions
 
 
@@ -62,10 +62,10 @@ def test_zero_sigma_means_no_noise():
 
 # -- goal babbling ----------------------------------------------------------------------------
 def test_inverse_model_starts_at_home():
-    babbler = GoalBabbling(TARGET_BOUNDS).start(table_6_1_arm(TARGET_LINKS))
-    x_home = planar_forward_kinematics(HOME[None], TARGET_LINKS)
+    babbler = GoalBabbling(GB_TARGET_BOUNDS).start(table_6_1_arm(GB_TARGET_LINKS))
+    x_home = planar_forward_kinematics(GB_HOME[None], GB_TARGET_LINKS)
     np.testing.assert_array_equal(babbler.model_.infer_command([[0.5, -0.5], [1.0, 0.0]]),
-                                  [HOME, HOME])
+                                  [GB_HOME, GB_HOME])
     np.testing.assert_array_equal(babbler.position_, x_home[0])
     assert babbler.steps_ == 0 and babbler.time_ == 0.0
 
@@ -74,7 +74,7 @@ def test_samples_are_what_the_robot_did_within_its_joint_limits():
     babbler, commands, positions = babble(0, 300)
     limits = TABLE_6_1_LIMITS
     assert ((commands >= limits[:, 0]) & (commands <= limits[:, 1])).all()
-    np.testing.assert_allclose(positions, planar_forward_kinematics(commands, TARGET_LINKS))
+    np.testing.assert_allclose(positions, planar_forward_kinematics(commands, GB_TARGET_LINKS))
     assert babbler.model_.inverse.n_samples_ == babbler.model_.forward.n_samples_ == 301
     np.testing.assert_array_equal(babbler.model_.inverse.Y_[1:], commands)   # after home
 
@@ -89,13 +89,13 @@ def test_same_seed_same_run_bit_for_bit_other_seed_differs():
 
 def test_returns_home_alternate_with_goals_when_p_home_is_1():
     babbler, commands, _ = babble(0, 60, n_subtargets=10, p_home=1.0)
-    np.testing.assert_array_equal(commands[19::20], np.tile(HOME, (3, 1)))
-    assert not np.isclose(commands[9::20], HOME).all(axis=1).any()
+    np.testing.assert_array_equal(commands[19::20], np.tile(GB_HOME, (3, 1)))
+    assert not np.isclose(commands[9::20], GB_HOME).all(axis=1).any()
 
 
 def test_callback_every_interval_of_simulated_time():
     times = []
-    babbler = GoalBabbling(TARGET_BOUNDS, steps_per_second=10).start(table_6_1_arm(TARGET_LINKS))
+    babbler = GoalBabbling(GB_TARGET_BOUNDS, steps_per_second=10).start(table_6_1_arm(GB_TARGET_LINKS))
     commands, _ = babbler.run_for(10.0, callback=lambda b: times.append(b.time_), interval=2.5)
     assert len(commands) == 100 and babbler.time_ == 10.0
     assert times == [2.5, 5.0, 7.5, 10.0]
@@ -103,9 +103,9 @@ def test_callback_every_interval_of_simulated_time():
 
 def test_goal_babbling_reduces_the_reaching_error_over_time():
     """The learning curve of §6.5.1 (target arm of Table 6.1), tested at 0, 100 and 300 s."""
-    target = table_6_1_arm(TARGET_LINKS)
-    points = evaluation_points(target, TARGET_BOUNDS, spacing=0.1)
-    babbler = GoalBabbling(TARGET_BOUNDS, seed=1).start(target)
+    target = table_6_1_arm(GB_TARGET_LINKS)
+    points = evaluation_points(target, GB_TARGET_BOUNDS, spacing=0.1)
+    babbler = GoalBabbling(GB_TARGET_BOUNDS, seed=1).start(target)
     curve = [evaluate_reaching(babbler.model_.inverse, target, points)]
     babbler.run_for(300, callback=lambda b: curve.append(
         evaluate_reaching(b.model_.inverse, target, points)), interval=100)
@@ -127,14 +127,14 @@ def test_goal_babbling_reduces_the_reaching_error_over_time():
     ({"seed": -1}, "seed must be an integer >= 0"),
 ])
 def test_bad_hyperparameters_raise_a_clear_value_error(hyperparameters, message):
-    hyperparameters = {"x_bounds": TARGET_BOUNDS, **hyperparameters}
+    hyperparameters = {"x_bounds": GB_TARGET_BOUNDS, **hyperparameters}
     with pytest.raises(ValueError, match=message):
-        GoalBabbling(**hyperparameters).start(table_6_1_arm(TARGET_LINKS))
+        GoalBabbling(**hyperparameters).start(table_6_1_arm(GB_TARGET_LINKS))
 
 
 def test_exploring_before_start_raises():
     with pytest.raises(ValueError, match="call start"):
-        GoalBabbling(TARGET_BOUNDS).step()
+        GoalBabbling(GB_TARGET_BOUNDS).step()
 
 
 def test_check_x_bounds_returns_arrays():

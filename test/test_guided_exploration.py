@@ -7,7 +7,7 @@ from lpa_transfer.goal_babbling import GoalBabbling
 from lpa_transfer.guided_exploration import (guided_exploration, pad_transferred, restrict,
                                              shared_limits)
 from lpa_transfer.kinematics import planar_forward_kinematics
-from two_link import SOURCE_LINKS, TARGET_BOUNDS, TARGET_LINKS, table_6_1_arm
+from two_link import GB_SOURCE_LINKS, GB_TARGET_BOUNDS, GB_TARGET_LINKS, table_6_1_arm
 
 #: A 3-joint target whose first joint the 2-joint source lacks (as Poppy's torso, §6.5.2).
 TORSO_LINKS = (0.2, 0.7, 0.4)
@@ -55,7 +55,7 @@ def test_restrict_moves_only_the_given_joints():
 
 
 def test_shared_limits_intersect_the_ranges():
-    source = table_6_1_arm(SOURCE_LINKS)
+    source = table_6_1_arm(GB_SOURCE_LINKS)
     limits = shared_limits(source, torso_arm(), [0, 1], [1, 2])
     np.testing.assert_allclose(limits, [(-1.2, 0.0), (0.4, 2.9)])
     with pytest.raises(ValueError, match="pair the shared joints one to one"):
@@ -65,8 +65,8 @@ def test_shared_limits_intersect_the_ranges():
 
 
 def test_guided_exploration_pairs_share_their_commands_table_6_1():
-    source, target = table_6_1_arm(SOURCE_LINKS), table_6_1_arm(TARGET_LINKS)
-    babbler = GoalBabbling(TARGET_BOUNDS, seed=3)
+    source, target = table_6_1_arm(GB_SOURCE_LINKS), table_6_1_arm(GB_TARGET_LINKS)
+    babbler = GoalBabbling(GB_TARGET_BOUNDS, seed=3)
     source_pairs, target_pairs = guided_exploration(babbler, source, target, [0, 1], [0, 1],
                                                     seconds=20)
     assert source_pairs.shape == target_pairs.shape == (200, 4)
@@ -79,7 +79,7 @@ def test_guided_exploration_pairs_share_their_commands_table_6_1():
 
 
 def test_guided_exploration_holds_the_target_only_joints_at_home():
-    source, target = table_6_1_arm(SOURCE_LINKS), torso_arm()
+    source, target = table_6_1_arm(GB_SOURCE_LINKS), torso_arm()
     babbler = GoalBabbling(((0.0, -1.2), (1.3, 0.6)), seed=0)
     source_pairs, target_pairs = guided_exploration(babbler, source, target, [0, 1], [1, 2],
                                                     seconds=10)

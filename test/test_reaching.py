@@ -5,15 +5,14 @@ import pytest
 
 from lpa_transfer.reaching import (Reaching, evaluate_reaching, evaluation_points, grid,
                                    reaching_errors, reaching_rate)
-from two_link import HOME, TABLE_6_1_LIMITS, TARGET_LINKS, table_6_1_arm
-from two_link import elbow_ik
+from two_link import GB_HOME, GB_TARGET_LINKS, TABLE_6_1_LIMITS, elbow_ik, table_6_1_arm
 
 
 class AnalyticIK:
     """A perfect inverse model: the closed-form elbow solution."""
 
     def predict(self, points):
-        return elbow_ik(points, TARGET_LINKS, TABLE_6_1_LIMITS)[0]
+        return elbow_ik(points, GB_TARGET_LINKS, TABLE_6_1_LIMITS)[0]
 
 
 class Constant:
@@ -26,7 +25,7 @@ class Constant:
 
 @pytest.fixture(scope="module")
 def target():
-    return table_6_1_arm(TARGET_LINKS)
+    return table_6_1_arm(GB_TARGET_LINKS)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +44,7 @@ def test_grid_is_regular_and_centred_in_the_box():
 
 def test_evaluation_points_are_reachable_evenly_spaced_and_deterministic(target, points):
     assert len(points) > 40
-    _, reachable = elbow_ik(points, TARGET_LINKS, TABLE_6_1_LIMITS)
+    _, reachable = elbow_ik(points, GB_TARGET_LINKS, TABLE_6_1_LIMITS)
     assert reachable.all()
     candidates = grid((points.min(axis=0), points.max(axis=0)), 0.08)
     spacing = np.diff(np.unique(np.round(points[:, 0], 9)))
@@ -70,10 +69,10 @@ def test_perfect_model_reaches_every_point(target, points):
 
 
 def test_home_only_model_reaches_few_points(target, points):
-    errors = reaching_errors(Constant(HOME), target, points)
-    result = evaluate_reaching(Constant(HOME), target, points)
+    errors = reaching_errors(Constant(GB_HOME), target, points)
+    result = evaluate_reaching(Constant(GB_HOME), target, points)
     assert 0.0 <= result.rate < 0.1 and result.mean_error == pytest.approx(errors.mean())
-    x_home = target.forward(HOME[None])[0]
+    x_home = target.forward(GB_HOME[None])[0]
     np.testing.assert_allclose(errors, np.linalg.norm(points - x_home, axis=1))
 
 

@@ -53,14 +53,14 @@ def elbow_ik(points, links, joint_limits=JOINT_LIMITS):
 
 # -- the 2-link arms of the goal-babbling experiment (thesis Table 6.1) -------------------------
 #: Table 6.1: link lengths (m) and the joint limits (rad) both arms share.
-SOURCE_LINKS, TARGET_LINKS = (0.5, 0.5), (0.7, 0.4)
+GB_SOURCE_LINKS, GB_TARGET_LINKS = (0.5, 0.5), (0.7, 0.4)
 TABLE_6_1_LIMITS = np.array([(-np.pi / 2, 0.0), (0.4, 2.9)])
-HOME = TABLE_6_1_LIMITS.mean(axis=1)   # our choice: the middle of the ranges
+GB_HOME = TABLE_6_1_LIMITS.mean(axis=1)   # our choice: the middle of the ranges
 #: the target's task box (bounding box of its workspace, rounded out)
-TARGET_BOUNDS = ((0.1, -1.1), (1.1, 0.4))
+GB_TARGET_BOUNDS = ((0.1, -1.1), (1.1, 0.4))
 
 
-def table_6_1_arm(links, home=HOME):
+def table_6_1_arm(links, home=GB_HOME):
     """A Table 6.1 arm as a Kinematics (the environment goal babbling explores)."""
     return Kinematics(TABLE_6_1_LIMITS, np.asarray(home, dtype=np.float64),
                       lambda q: planar_forward_kinematics(q, links))
