@@ -34,6 +34,7 @@ from pathlib import Path
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import ScalarFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
@@ -295,7 +296,9 @@ def plot_curves(curves, experiment, path):
                 ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
                                 alpha=0.2)
             ax.set(title=f"{robot} learning {star}", xlabel="trial",
-                   ylabel="tracking error (mm)", yscale="log")
+                   ylabel="tracking error (mm, log scale)", yscale="log")
+            ax.yaxis.set_major_formatter(ScalarFormatter())   # 2, 3, 5 mm, not 2×10⁰
+            ax.yaxis.set_minor_formatter(ScalarFormatter())
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
     fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s)")
