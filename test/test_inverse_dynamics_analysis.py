@@ -61,7 +61,7 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     merged = json.loads((tmp_path / "all" / "results.json").read_text())
     assert merged["seeds"] == [0, 2, 1] and merged["settings"] == SETTINGS
     report = (tmp_path / "all" / "report.txt").read_text()
-    assert "3 seed(s)" in report
+    assert "3 seed(s) (0, 2, 1)" in report
     # per robot: 3 trials from scratch once, 3 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
     assert f"simulated: {(3 + 27) * 8.4 + 6:.0f} s per robot" in report
     for name in ("learning_curves.csv", "fig5_7_5_8_learning_curves.png", "fig5_6_traces.png"):

@@ -250,7 +250,8 @@ def write_outputs(curves, traces, experiment, out):
             experiment.babbling_seconds)
     rows, savings = convergence_table(*args)
     first_rows, first_savings = convergence_table(*args, stay=False)
-    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s), "
+    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s) "
+             f"({', '.join(map(str, experiment.done_seeds))}), "
              f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
              f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "
              f"within': the first trial within it", "",
