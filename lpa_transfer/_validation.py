@@ -82,3 +82,13 @@ def as_transfer_input(model, source):
         raise ValueError(f"source has {source.shape[1]} columns but the model was fitted "
                          f"on {model.n_features_in_} source dimensions")
     return source
+
+
+def check_box(low, high, problem):
+    """(low, high) of an axis-aligned box as float arrays; ValueError starting with
+    ``problem`` unless they are finite 1-D vectors of one length with low <= high."""
+    low, high = (np.asarray(bound, dtype=np.float64) for bound in (low, high))
+    if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
+            or not (np.isfinite(low).all() and np.isfinite(high).all()) or (low > high).any():
+        raise ValueError(f"{problem}, got {low.tolist()} and {high.tolist()}")
+    return low, high

@@ -23,7 +23,7 @@ from typing import Callable
 import numpy as np
 
 from . import inverse_kinematics
-from ._validation import check_int
+from ._validation import check_box, check_int
 from .kinematics import home_pose, planar_forward_kinematics
 from .serial_chain import forward_kinematics
 
@@ -61,12 +61,7 @@ def planar_kinematics(robot, home=None):
 
 def check_task_box(low, high):
     """(low, high) as float arrays; ValueError unless finite, low <= high, one length."""
-    low, high = (np.asarray(b, dtype=np.float64) for b in (low, high))
-    if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
-            or not np.isfinite(low).all() or not np.isfinite(high).all() or (low > high).any():
-        raise ValueError(f"task_lines needs finite task_low <= task_high of one length, "
-                         f"got {low.tolist()} and {high.tolist()}")
-    return low, high
+    return check_box(low, high, "task_lines needs finite task_low <= task_high of one length")
 
 
 def box_around(kinematics, halfwidth):

@@ -31,6 +31,8 @@ import numpy as np
 
 from . import inverse_kinematics
 from ._validation import check_int
+from .guided_exploration import pad_transferred
+from .kinematics import overlapping_limits
 
 PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
 JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
@@ -121,19 +123,13 @@ def load_correspondences(path):
 def shared_limits(source, target):
     """Intersection of the two robots' limits on their common (first) joints."""
     n_common = min(source.n_joints, target.n_joints)
-    lower = np.maximum(source.joint_limits[:n_common, 0], target.joint_limits[:n_common, 0])
-    upper = np.minimum(source.joint_limits[:n_common, 1], target.joint_limits[:n_common, 1])
-    if (lower > upper).any():
-        raise ValueError(f"same_command needs overlapping joint ranges; the common joints' "
-                         f"ranges do not overlap (lower {lower}, upper {upper})")
-    return np.column_stack((lower, upper))
+    return overlapping_limits(source.joint_limits[:n_common], target.joint_limits[:n_common],
+                              "same_command needs overlapping joint ranges; the common joints")
 
 
 def with_home(commands, home):
     """Commands for all joints of a robot: the given columns, then its home values."""
-    full = np.tile(home, (len(commands), 1))
-    full[:, :commands.shape[1]] = commands
-    return full
+    return pad_transferred(commands, home, np.arange(commands.shape[1]))
 
 
 def check_pairing_rule(pairing_rule):

@@ -56,10 +56,8 @@ def check_x_bounds(x_bounds, n_task=None):
     except (TypeError, ValueError) as exc:
         raise ValueError(f"x_bounds must be a pair (low, high) of coordinate lists: {exc}") \
             from None
-    if low.ndim != 1 or low.size == 0 or low.shape != high.shape \
-            or not (np.isfinite(low).all() and np.isfinite(high).all()) or (low > high).any():
-        raise ValueError(f"x_bounds must be finite (low, high) of one length with low <= high, "
-                         f"got {low.tolist()} and {high.tolist()}")
+    check.check_box(low, high, "x_bounds must be finite (low, high) of one length with "
+                               "low <= high")
     if n_task is not None and low.size != n_task:
         raise ValueError(f"x_bounds have {low.size} coordinates but the robot's task space has "
                          f"{n_task}")

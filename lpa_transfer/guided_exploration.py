@@ -17,6 +17,7 @@ import numpy as np
 
 from . import _validation as check
 from .babbling import Kinematics
+from .kinematics import overlapping_limits
 
 
 def check_joints(joints, n_joints, name="shared_joints"):
@@ -73,14 +74,8 @@ def shared_limits(source, target, source_joints, target_joints):
     if len(source_joints) != len(target_joints):
         raise ValueError(f"source_joints and target_joints must pair the shared joints one to "
                          f"one, got {len(source_joints)} and {len(target_joints)}")
-    source_limits = np.asarray(source.joint_limits, dtype=np.float64)[source_joints]
-    target_limits = np.asarray(target.joint_limits, dtype=np.float64)[target_joints]
-    lower = np.maximum(source_limits[:, 0], target_limits[:, 0])
-    upper = np.minimum(source_limits[:, 1], target_limits[:, 1])
-    if (lower > upper).any():
-        raise ValueError(f"the shared joints' ranges do not overlap (lower {lower.tolist()}, "
-                         f"upper {upper.tolist()})")
-    return np.column_stack((lower, upper))
+    return overlapping_limits(np.asarray(source.joint_limits)[source_joints],
+                              np.asarray(target.joint_limits)[target_joints], "the shared joints")
 
 
 def guided_exploration(babbling, source, target, source_joints, target_joints, seconds,

@@ -57,6 +57,18 @@ def home_pose(joint_limits, positions=None, name="home pose"):
     return home
 
 
+def overlapping_limits(limits_a, limits_b, joints="the joints"):
+    """(n, 2) intersection of two robots' (n, 2) ranges of corresponding joints; ValueError
+    naming ``joints`` when a range is empty."""
+    limits_a, limits_b = (np.asarray(limits, dtype=np.float64) for limits in (limits_a, limits_b))
+    lower = np.maximum(limits_a[:, 0], limits_b[:, 0])
+    upper = np.minimum(limits_a[:, 1], limits_b[:, 1])
+    if (lower > upper).any():
+        raise ValueError(f"{joints}' ranges do not overlap (lower {lower.tolist()}, upper "
+                         f"{upper.tolist()})")
+    return np.column_stack((lower, upper))
+
+
 def sample_joint_uniform(n_samples, joint_limits, rng):
     """``n_samples`` joint vectors (N, n) drawn uniformly in the box ``joint_limits`` (n, 2).
 
