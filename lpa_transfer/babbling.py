@@ -39,16 +39,31 @@ class Kinematics:
     maps joint vectors (N, n) to task points (N, m). ``task_box`` ((low), (high)), if set, is
     where this robot's task-space babbling happens (robots of different sizes babble in their
     own boxes, §5.4.1); it replaces the program's ``task_low``/``task_high``.
+    ``execute`` (Q) -> (Q_observed, X), if set, runs commands on a robot that may not reach
+    them exactly (:func:`lpa_transfer.robot_environment.stepped_environment`); see
+    :func:`execute`.
     """
 
     joint_limits: np.ndarray
     home: np.ndarray
     forward: Callable[[np.ndarray], np.ndarray]
     task_box: tuple = None
+    execute: Callable = None
 
     @property
     def n_joints(self):
         return len(self.joint_limits)
+
+
+def execute(environment, commands):
+    """Run joint commands (N, n) on ``environment``: (observed joint positions (N, n),
+    observed task points (N, m)). A kinematic environment (no ``execute``) reaches every
+    command exactly, so the positions are the commands and the points their ``forward``."""
+    commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
+    if environment.execute is None:
+        return commands, np.asarray(environment.forward(commands), dtype=np.float64)
+    positions, points = environment.execute(commands)
+    return np.asarray(positions, dtype=np.float64), np.asarray(points, dtype=np.float64)
 
 
 def planar_kinematics(robot, home=None):

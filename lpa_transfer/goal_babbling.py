@@ -13,8 +13,10 @@ x_t = (1 − t/T)·x_0 + (t/T)·x_g, t = 1..T (:func:`subtargets`). The thesis' 
 "x_t* = (T−t)/T·x_g + t/T·x_{t−1}", is garbled in the text we have; its words, "a linear
 sequence between the current robot position x_0 and the goal x_g", are what is implemented,
 ending at x_T = x_g. Each step commands q_t = L⁻¹(x_t) + E_t(x_t), clipped into the joint
-limits, executes it, and updates the model with (q_t, x) — x the observed position, not the
-sub-target.
+limits, executes it, and updates the model with the observed (q, x) — x the observed position,
+not the sub-target; q the command, or, on a robot that does not reach every command within a
+step (a simulated one in position mode, :mod:`lpa_transfer.robot_environment`), the joint
+positions it reached.
 
 Exploration noise (eq. 6.1, after Rolf et al. 2011): E_t(x*) = A_t x* + b_t, a random linear
 function of the (sub-)target, A_t ∈ R^{d×m}, b_t ∈ R^d. Its entries start i.i.d. N(0, σ²)
@@ -44,6 +46,7 @@ Randomness: goals and home returns draw from one stream, the noise from another,
 import numpy as np
 
 from . import _validation as check
+from .babbling import execute
 from .kinematics import home_pose
 from .sensorimotor import make_sensorimotor_model
 
@@ -146,7 +149,7 @@ class GoalBabbling:
         limits = np.asarray(environment.joint_limits, dtype=np.float64)
         q_home = home_pose(limits, environment.home if self.home is None else self.home,
                            name="GoalBabbling home")
-        x_home = self._execute(environment, q_home)
+        q_home, x_home = self._execute(environment, q_home)
         self._low, self._high = check_x_bounds(self.x_bounds, len(x_home))
         goal_stream, noise_stream = np.random.SeedSequence(self.seed).spawn(2)
         self._rng = np.random.default_rng(goal_stream)
@@ -166,7 +169,9 @@ class GoalBabbling:
 
     @staticmethod
     def _execute(environment, q):
-        return np.asarray(environment.forward(q[None]), dtype=np.float64)[0]
+        """Run one command: the observed (q, x) (:func:`lpa_transfer.babbling.execute`)."""
+        positions, points = execute(environment, q[None])
+        return positions[0], points[0]
 
     @property
     def time_(self):
@@ -187,7 +192,8 @@ class GoalBabbling:
         self._plan = list(path[::-1])
 
     def step(self):
-        """One step of Alg. 6 (l. 9-12): returns the executed command q and observed x."""
+        """One step of Alg. 6 (l. 9-12): returns the observed q (the command, on a kinematic
+        environment) and x; ``sent_`` is the command itself."""
         self._check_started()
         if not self._plan:
             self._next_movement()
@@ -196,8 +202,8 @@ class GoalBabbling:
             q = self.model_.infer_command(point[None])[0] + self.noise_(point)
         else:
             q = point
-        q = np.clip(q, self._limits[:, 0], self._limits[:, 1])
-        x = self._execute(self.environment_, q)
+        self.sent_ = np.clip(q, self._limits[:, 0], self._limits[:, 1])
+        q, x = self._execute(self.environment_, self.sent_)
         self.model_.update(q[None], x[None])
         self.noise_.step()
         self.position_, self.command_ = x, q
@@ -205,21 +211,24 @@ class GoalBabbling:
         return q, x
 
     def run(self, n_steps, callback=None, every=None):
-        """Explore ``n_steps`` steps: ``(Q, X)``, the commands (n_steps, d) and positions
-        (n_steps, m). ``callback(self)`` is called whenever ``steps_`` reaches a multiple of
-        ``every`` (e.g. to evaluate the model)."""
+        """Explore ``n_steps`` steps: ``(Q, X)``, the observed joint positions (n_steps, d) and
+        task positions (n_steps, m); ``commands_`` holds the commands sent (equal to Q on a
+        kinematic environment). ``callback(self)`` is called whenever ``steps_`` reaches a
+        multiple of ``every`` (e.g. to evaluate the model)."""
         self._check_started()
         check.check_int(n_steps, "n_steps", 0)
         if callback is not None:
             check.check_int(every, "every", 1)
-        commands, positions = [], []
+        observed, positions, sent = [], [], []
         for _ in range(n_steps):
             q, x = self.step()
-            commands.append(q)
+            observed.append(q)
             positions.append(x)
+            sent.append(self.sent_)
             if callback is not None and self.steps_ % every == 0:
                 callback(self)
-        return (np.reshape(commands, (n_steps, len(self._q_home))),
+        self.commands_ = np.reshape(sent, (n_steps, len(self._q_home)))
+        return (np.reshape(observed, (n_steps, len(self._q_home))),
                 np.reshape(positions, (n_steps, len(self._x_home))))
 
     def run_for(self, seconds, callback=None, interval=None):

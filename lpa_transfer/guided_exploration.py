@@ -7,6 +7,8 @@ T_guided with goal babbling (Alg. 6) moving only those joints, the others held a
 values; the source then executes the same sequence of shared commands q̄ on its own body,
 its other joints at its home (Alg. 7). Pairing the two by command gives the correspondences
 {(q̄, x_s)} and {(q̄, x_t)} in R^{d_c + m} from which a domain mapping f is learned (§6.4.1).
+On simulated robots (:mod:`lpa_transfer.robot_environment`) each side's q̄ is the joint
+positions that robot reached for the command, so the two may differ slightly.
 
 The shared commands are explored within the intersection of both robots' ranges of the
 shared joints, so that both bodies can execute every command exactly (the pairs then really
@@ -16,7 +18,7 @@ completes them with the target's home values for the joints the source lacks (§
 import numpy as np
 
 from . import _validation as check
-from .babbling import Kinematics
+from .babbling import Kinematics, execute
 from .kinematics import overlapping_limits
 
 
@@ -62,8 +64,14 @@ def restrict(robot, joints, joint_limits=None):
                              f"with lower <= upper, got {given.tolist()}")
         limits = given
     home = np.asarray(robot.home, dtype=np.float64)
+    run = None
+    if robot.execute is not None:            # a robot: observe the shared joints it reached
+        def run(q):
+            positions, points = robot.execute(pad_transferred(q, home, joints))
+            return np.asarray(positions)[:, joints], points
     return Kinematics(limits, np.clip(home[joints], limits[:, 0], limits[:, 1]),
-                      lambda q: robot.forward(pad_transferred(q, home, joints)), robot.task_box)
+                      lambda q: robot.forward(pad_transferred(q, home, joints)), robot.task_box,
+                      run)
 
 
 def shared_limits(source, target, source_joints, target_joints):
@@ -91,7 +99,8 @@ def guided_exploration(babbling, source, target, source_joints, target_joints, s
     """
     limits = shared_limits(source, target, source_joints, target_joints)
     babbling.start(restrict(target, target_joints, limits), model)
-    commands, target_points = babbling.run_for(seconds)
-    source_points = np.asarray(restrict(source, source_joints, limits).forward(commands),
-                               dtype=np.float64)
-    return np.hstack((commands, source_points)), np.hstack((commands, target_points))
+    target_joint_values, target_points = babbling.run_for(seconds)
+    source_joint_values, source_points = execute(restrict(source, source_joints, limits),
+                                                 babbling.commands_)
+    return np.hstack((source_joint_values, source_points)), \
+        np.hstack((target_joint_values, target_points))
