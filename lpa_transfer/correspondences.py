@@ -22,16 +22,25 @@ concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (bac
 difference of velocities), ``effort`` (one value per joint) and ``ee_x``/``ee_y``/``ee_z``
 (end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
 z = (q, x) of a planar arm.
+
+Guided exploration (§6.4.2, Alg. 7) is the fourth way, with its own pairing:
+:func:`collect_guided_correspondences` lets the target goal-babble (Alg. 6) on the joints it
+shares with the source, then the source executes the same commands; pair i is each robot's
+observed (q̄, x) for command i (pairing rule ``same_command``).
 """
+import copy
 import os
 import zipfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from . import inverse_kinematics
-from ._validation import check_int
-from .guided_exploration import pad_transferred
+from ._validation import check_float, check_int
+from .babbling import execute
+from .goal_babbling import check_x_bounds
+from .guided_exploration import guided_exploration, pad_transferred, restrict
+from .guided_exploration import shared_limits as shared_joint_limits
 from .kinematics import overlapping_limits
 
 PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
@@ -228,3 +237,100 @@ def collect_correspondences(program, pairing_rule, source, target, step_source, 
 def _rows(samples):
     """Samples as an (N, D) array; (0, 0) when there are none."""
     return np.array(samples) if samples else np.empty((0, 0))
+
+
+# -- guided exploration (§6.4.2, Alg. 7) ------------------------------------------------------
+class _Stopped(Exception):
+    """Raised inside a robot's ``execute`` when ``should_stop()`` ends a guided collection."""
+
+
+def _observing(environment, joints, n_task, should_stop, on_row):
+    """``environment`` (a Kinematics) executing its commands one at a time: before each,
+    ``should_stop()`` may end the collection (:class:`_Stopped`); after each, ``on_row(row)``
+    sees the observed row (q̄, x): the positions of ``joints`` and the task point."""
+    def run(commands):
+        commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
+        positions, points = [], []
+        for command in commands:
+            if should_stop is not None and should_stop():
+                raise _Stopped
+            q, x = execute(environment, command[None])
+            positions.append(q[0])
+            points.append(x[0])
+            on_row(np.concatenate((q[0, joints], x[0])))
+        return (np.reshape(positions, commands.shape),
+                np.reshape(points, (len(commands), n_task)))
+
+    return replace(environment, forward=lambda commands: run(commands)[1],
+                               execute=run)
+
+
+def check_guided_exploration(babbling, source, target, source_joints, target_joints, seconds):
+    """Check a guided collection's set-up before any robot moves; ValueError if it is bad.
+
+    ``source``/``target`` must be kinematic models (their ``forward`` must not run a robot,
+    e.g. :func:`lpa_transfer.babbling.robot_kinematics`): a copy of ``babbling`` is started on
+    the restricted target, which checks its hyperparameters, home and ``x_bounds`` against the
+    target's task space. Returns the (d_c, 2) shared joint limits.
+    """
+    check_float(seconds, "seconds", 0)
+    limits = shared_joint_limits(source, target, source_joints, target_joints)
+    kinematic = replace(target, execute=None)
+    copy.copy(babbling).start(restrict(kinematic, target_joints, limits))
+    return limits
+
+
+def collect_guided_correspondences(babbling, source, target, source_joints, target_joints,
+                                   seconds, on_pair=None, should_stop=None, model=None):
+    """Guided exploration (thesis §6.4.2, Alg. 7) as a correspondence collection.
+
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
+    target's task space); ``source``/``target`` are environments (Kinematics whose commands
+    run on the robots, e.g. :func:`lpa_transfer.robot_environment.stepped_environment`).
+    ``source_joints[i]`` of the source is ``target_joints[i]`` of the target (the shared
+    joints Q̄). The target goal-babbles for ``seconds`` simulated seconds moving the shared
+    joints only, its other joints at home, learning ``model`` (default: a fresh one; then
+    ``babbling.model_``); the source then executes the same commands, its other joints at
+    its home (:func:`lpa_transfer.guided_exploration.guided_exploration`). Pair i holds each
+    robot's observed row (q̄, x) for command i: the positions its shared joints reached and
+    its task point. ``on_pair(index, source_row, target_row)`` sees each pair as it is made,
+    as the source executes command i. ``should_stop()`` (checked before every command of
+    either robot) ends the collection early: only the commands both robots executed are
+    paired (none while the target is still babbling) and ``complete`` is False.
+
+    Returns a :class:`CorrespondenceSet`: pairing rule ``same_command``, features
+    (``position``, ``ee_x``, …) with ``position`` the shared joints only, ``sim_time`` the
+    source's execution time on goal babbling's clock (pairs / ``steps_per_second``), and the
+    hyperparameters in ``metadata``; robot names are left empty for the caller.
+    """
+    check_float(seconds, "seconds", 0)
+    shared_joint_limits(source, target, source_joints, target_joints)   # before any step
+    low, high = check_x_bounds(babbling.x_bounds)
+    n_task = len(low)
+    target_rows, source_rows = [], []
+
+    def on_source_row(row):
+        index = len(source_rows)
+        source_rows.append(row)
+        if on_pair is not None:
+            on_pair(index, row, target_rows[index + 1])    # target_rows[0]: its home
+
+    try:
+        guided_exploration(
+            babbling, _observing(source, source_joints, n_task, should_stop, on_source_row),
+            _observing(target, target_joints, n_task, should_stop, target_rows.append),
+            source_joints, target_joints, seconds, model)
+        complete = True
+    except _Stopped:
+        complete = False
+    metadata = dict(guided_seconds=float(seconds), x_low=low, x_high=high,
+                    source_joints=np.asarray(source_joints),
+                    target_joints=np.asarray(target_joints),
+                    n_subtargets=babbling.n_subtargets, sigma=babbling.sigma,
+                    drift=babbling.drift, p_home=babbling.p_home,
+                    steps_per_second=babbling.steps_per_second, seed=babbling.seed)
+    return CorrespondenceSet(
+        _rows(source_rows), _rows(target_rows[1:len(source_rows) + 1]),
+        pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],
+        sim_time=len(source_rows) / babbling.steps_per_second, complete=complete,
+        metadata=metadata)

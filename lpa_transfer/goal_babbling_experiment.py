@@ -83,7 +83,7 @@ class Curves(NamedTuple):
     n_transferred: np.ndarray
 
 
-def _seeds(seed):
+def derived_seeds(seed):
     """Independent integer seeds (source babbling, target babbling, LPA) from one seed."""
     check.check_int(seed, "seed", 0)
     return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(3)]
@@ -98,7 +98,7 @@ def source_experience(config, seed):
     """The source's experience ξ_s (N, d + m), rows (q, x_s) of its goal babbling for
     ``config.source_seconds`` (read-only; cached)."""
     source = config.arm(config.source_links)
-    babbler = _babbler(config, source, _seeds(seed)[0])
+    babbler = _babbler(config, source, derived_seeds(seed)[0])
     rows = np.hstack(babbler.start(source, make_sensorimotor_model(forward=False))
                      .run_for(config.source_seconds))
     rows.flags.writeable = False
@@ -145,7 +145,7 @@ def run_condition(condition, seed, config=Experiment1()):
         raise ValueError(f"condition must be one of {CONDITIONS}, got {condition!r}")
     times = evaluation_times(config)
     target = config.arm(config.target_links)
-    points, seeds = _test_points(config), _seeds(seed)
+    points, seeds = _test_points(config), derived_seeds(seed)
     babbler = _babbler(config, target, seeds[1])
     model = make_sensorimotor_model(forward=False)
     if condition.endswith("-guarded"):
@@ -189,7 +189,7 @@ def _guided_phase(condition, config, babbler, model, seed, evaluate, times):
         n = 1 + int(round(time * babbler.steps_per_second))   # the home sample, then steps
         evaluate(clone(own).fit(own.X_[:n], own.Y_[:n], own.sample_weight_[:n]), time, 0)
     mapping = ProcrustesAnalysis() if condition.startswith("PA") else \
-        LocalProcrustesAnalysis(random_state=_seeds(seed)[2], **dict(config.lpa))
+        LocalProcrustesAnalysis(random_state=derived_seeds(seed)[2], **dict(config.lpa))
     commands, task_points = transfer_experience(mapping.fit(*pairs),
                                                 source_experience(config, seed),
                                                 target.home, [0, 1])

@@ -243,3 +243,25 @@ def run_job(name, make_node, job, args=None):
                 node.spinner.shutdown()
             node.destroy_node()
         rclpy.try_shutdown()
+
+
+class ServiceCalls:
+    """Blocking service calls of a job node (an experiment client): one client per service
+    name, made on first use; ``call(srv_type, name, **request_fields)`` returns the answer
+    and raises RuntimeError when it says ``success = false``."""
+
+    def __init__(self, node, executor, timeout, stop):
+        self.node, self.executor, self.timeout, self.stop = node, executor, timeout, stop
+        self.clients = {}
+
+    def client(self, srv_type, name):
+        if name not in self.clients:
+            self.clients[name] = self.node.create_client(srv_type, name)
+        return self.clients[name]
+
+    def call(self, srv_type, name, **fields):
+        answer = call_service(self.executor, self.client(srv_type, name),
+                              srv_type.Request(**fields), self.timeout, self.stop)
+        if not answer.success:
+            raise RuntimeError(f"{name} failed: {answer.message}")
+        return answer

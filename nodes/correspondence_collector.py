@@ -12,6 +12,19 @@ babbling early: the pairs made so far are published and saved (``complete = Fals
 file) and no model is fitted. Because the robots are stepped in lock-step, a run takes as
 long as the computation, and the same parameters give the same pairs, bit for bit.
 
+Guided exploration (``program:=goal_babbling``, thesis §6.4.2, Alg. 7,
+:func:`lpa_transfer.correspondences.collect_guided_correspondences`): the target goal-babbles
+(Alg. 6) for ``guided_seconds`` on the joints it shares with the source, its other joints at
+``target_home``; then the source executes the same commands, its other joints at
+``source_home``. Pair i is each robot's observed (q̄, x) for command i: the positions its
+shared joints reached and its task coordinates (x, y for a planar arm, world x, y, z for a
+serial chain; ``features`` are ignored). First both robots are reset to rest at their homes
+(ResetRobot services ``source_reset``/``target_reset``, default
+``/source/robot_sim/reset`` and ``/target/robot_sim/reset``), so that the same seed gives the
+same pairs whatever ran before. The robot_sims run in position mode, the pairing rule is
+``same_command``; pairs are made (and published) while the source executes, and a
+SIGINT while the target still babbles leaves no pairs (``complete = False``).
+
 Parameters:
 
 * ``source_robot``, ``target_robot``: robot parameter files (joint limits and kinematics, for
@@ -21,13 +34,24 @@ Parameters:
 * ``source_home``, ``target_home`` (double arrays): the poses babbling starts from; default
   zero clipped into the limits, robot_sim's default initial pose.
 * ``pairing_rule``: ``same_command`` (default), ``same_time_index`` or ``same_task_point``.
-* ``program``: ``joint_lines`` (default) or ``task_lines``; ``n_segments`` (20),
-  ``samples_per_segment`` (5), ``steps_per_sample`` (physics steps between samples, 400),
-  ``seed`` (0), ``task_low``/``task_high`` (task_lines' waypoint box, m), ``task_offset``
-  (same_task_point: the target's task frame relative to the source's, m);
+* ``program``: ``joint_lines`` (default), ``task_lines`` or ``goal_babbling`` (guided
+  exploration, above); ``n_segments`` (20), ``samples_per_segment`` (5), ``steps_per_sample``
+  (physics steps between samples, 400), ``seed`` (0), ``task_low``/``task_high``
+  (task_lines' waypoint box, m), ``task_offset`` (same_task_point: the target's task frame
+  relative to the source's, m);
   ``source_task_low``/``source_task_high`` and ``target_task_*``: each robot's own box for
   task_lines (robots of different sizes babble in their own workspaces, §5.4.1; the same
   seed puts the waypoints at the same relative places).
+* goal_babbling only: ``guided_seconds`` (T_guided, simulated s, default 60: the target's
+  babbling time), ``x_low``/``x_high`` (double arrays, required: X_bounds, the box of the
+  target's goals in its task space), ``source_joints``/``target_joints`` (int arrays: the
+  shared joints, ``source_joints[i]`` is ``target_joints[i]``; default the first
+  min(n_s, n_t) joints of each), ``n_subtargets`` (T, 10), ``sigma`` (0.1) and ``drift``
+  (0.01) of the exploration noise, ``p_home`` (0.1, returns home), ``steps_per_second``
+  (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.GoalBabbling`;
+  ``seed`` seeds it and ``steps_per_sample`` is the physics steps of one movement step (e.g.
+  100 with robot_sim's 1 ms step for 10 steps a second). ``*_task_*``, ``task_offset``,
+  ``features`` and ``n_segments``/``samples_per_segment`` do not apply.
 * ``source_task_halfwidth``, ``target_task_halfwidth`` (m, one value per task coordinate):
   instead of ``*_task_low``/``*_task_high``, babble in the box of this half-width around the
   end effector at ``*_home`` — "in the vicinity" of a task centred there (§5.5.3,
@@ -66,17 +90,24 @@ from rclpy.parameter import Parameter
 
 from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
 from lpa_transfer.control import PID, start_servo
-from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features, check_pairing_rule,
-                                          collect_correspondences)
+from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features,
+                                          check_guided_exploration, check_pairing_rule,
+                                          collect_correspondences,
+                                          collect_guided_correspondences)
+from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
+from lpa_transfer.robot_environment import stepped_environment
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
-from lpa_transfer_interfaces.srv import FitModel, StepRobot
+from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
                                           robot_stepper, run_job, sim_stamp, to_matrix,
                                           wait_for_services, wait_for_subscribers)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
+GUIDED = "goal_babbling"          # the program of guided exploration (§6.4.2, Alg. 7)
+GOAL_BABBLING_FIELDS = {"n_subtargets": 10, "sigma": 0.1, "drift": 0.01, "p_home": 0.1,
+                        "steps_per_second": 10.0}
 
 
 def required_path(value, name):
@@ -113,13 +144,20 @@ class CorrespondenceCollector(Node):
         self.pid = {side: PID.from_gains(gains[side], f"{side}_pid") if gains[side] else None
                     for side in self.robots}
         self.pairing_rule = check_pairing_rule(declare("pairing_rule", "same_command"))
-        self.program = BabblingProgram(
-            declare("program", "joint_lines"), declare("n_segments", 20),
-            declare("samples_per_segment", 5), declare("seed", 0),
-            tuple(doubles("task_low")), tuple(doubles("task_high")))
+        program, seed = declare("program", "joint_lines"), declare("seed", 0)
+        n_segments, samples_per_segment = (declare("n_segments", 20),
+                                           declare("samples_per_segment", 5))
+        task_low, task_high = tuple(doubles("task_low")), tuple(doubles("task_high"))
         self.steps_per_sample = declare("steps_per_sample", 400)
         self.task_offset = doubles("task_offset") or None
-        self.features = check_features(array_parameter(self, "features") or DEFAULT_FEATURES)
+        features = array_parameter(self, "features")
+        self.guided = program == GUIDED
+        if self.guided:
+            self.declare_guided(seed, gains, bool(features))
+        else:
+            self.program = BabblingProgram(program, n_segments, samples_per_segment, seed,
+                                           task_low, task_high)
+        self.features = check_features(features or DEFAULT_FEATURES)
         self.output = os.path.expanduser(declare("output", ""))
         self.model_id = declare("model_id", "")
         self.fit_fields = {name: declare(name, default) for name, default in FIT_FIELDS.items()}
@@ -133,6 +171,9 @@ class CorrespondenceCollector(Node):
         self.step_clients = {side: self.create_client(
             StepRobot, declare(f"{side}_step", f"/{side}/robot_sim/step"))
             for side in ("source", "target")}
+        self.reset_clients = {side: self.create_client(
+            ResetRobot, declare(f"{side}_reset", f"/{side}/robot_sim/reset"))
+            for side in ("source", "target")} if self.guided else {}
         self.fit_client = self.create_client(FitModel, declare("mapping_service",
                                                                "/lpa_mapping/fit"))
         self.sample_pub = self.create_publisher(CorrespondenceSample, "correspondences",
@@ -142,6 +183,44 @@ class CorrespondenceCollector(Node):
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
         self.sim_time = 0.0
+
+    def declare_guided(self, seed, gains, features_given):
+        """The goal_babbling parameters, checked on the robots' kinematics before any step."""
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        if self.pairing_rule != "same_command":
+            raise ValueError(f"program {GUIDED} pairs the robots by same_command (guided "
+                             f"exploration, §6.4.2), not by pairing_rule "
+                             f"{self.pairing_rule!r}")
+        if any(gains.values()):
+            raise ValueError(f"program {GUIDED} runs the robots in position mode: leave "
+                             f"source_pid and target_pid empty")
+        if features_given:
+            self.get_logger().warning(f"program {GUIDED}: the features parameter is ignored "
+                                      "(rows are (shared joint positions, task point))")
+        self.guided_seconds = float(declare("guided_seconds", 60.0))
+        if not (np.isfinite(self.guided_seconds) and self.guided_seconds >= 0):
+            raise ValueError(f"guided_seconds must be a finite number >= 0, got "
+                             f"{self.guided_seconds!r}")
+        x_bounds = [array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)
+                    for name in ("x_low", "x_high")]
+        if not all(x_bounds):
+            raise ValueError(f"program {GUIDED} needs x_low and x_high (the box of the "
+                             "target's goals in its task space)")
+        try:
+            check_x_bounds(x_bounds)
+        except ValueError as exc:
+            raise ValueError(f"x_low/x_high: {exc}") from None
+        n_shared = min(robot.n_joints for robot in self.robots.values())
+        self.joints = {}
+        for side in self.robots:
+            given = array_parameter(self, f"{side}_joints", Parameter.Type.INTEGER_ARRAY)
+            self.joints[side] = given or list(range(n_shared))
+        self.babbling = GoalBabbling(
+            tuple(tuple(bound) for bound in x_bounds), seed=seed,
+            **{name: declare(name, default) for name, default in GOAL_BABBLING_FIELDS.items()})
+        check_guided_exploration(self.babbling, self.kinematics["source"],
+                                 self.kinematics["target"], self.joints["source"],
+                                 self.joints["target"], self.guided_seconds)
 
     # -- talking to the robots and the mapping service ---------------------------------------
     def call(self, client, request):
@@ -186,25 +265,55 @@ class CorrespondenceCollector(Node):
                                f"{response.training_rmse:.6g})")
 
     # -- the run ----------------------------------------------------------------------------
-    def run(self):
-        clients = list(self.step_clients.values()) + ([self.fit_client] if self.model_id else [])
-        wait_for_services(clients, self.wait_timeout, self.stop)
-        for topic, count in ((self.sample_pub.topic_name, self.wait_for_subscribers),
-                             *((topic, 1) for topic in self.subscribed_topics)):
-            wait_for_subscribers(self, topic, count, self.wait_timeout, self.stop)
-        source, target = self.robots["source"], self.robots["target"]
+    def collect(self):
+        """Babbling programs (joint_lines, task_lines) under one of the pairing rules."""
         self.get_logger().info(
-            f"babbling {source.name} -> {target.name}: {self.program.program}, "
-            f"{self.program.n_samples} samples, {self.pairing_rule}, seed {self.program.seed}")
-        start = time.perf_counter()
+            f"babbling {self.robots['source'].name} -> {self.robots['target'].name}: "
+            f"{self.program.program}, {self.program.n_samples} samples, {self.pairing_rule}, "
+            f"seed {self.program.seed}")
         pairs = collect_correspondences(
             self.program, self.pairing_rule, self.kinematics["source"],
             self.kinematics["target"], self.stepper("source"), self.stepper("target"),
             self.steps_per_sample, self.features, self.task_offset, on_pair=self.publish_pair,
             should_stop=self.stop.is_set)
+        pairs.metadata.update(seed=self.program.seed, program=self.program.program)
+        return pairs
+
+    def collect_guided(self):
+        """Guided exploration (§6.4.2, Alg. 7): the target goal-babbles, the source follows."""
+        babbling = self.babbling
+        self.get_logger().info(
+            f"goal babbling {self.robots['target'].name} for {self.guided_seconds:g} s "
+            f"({round(self.guided_seconds * babbling.steps_per_second)} steps, joints "
+            f"{self.joints['target']}), then {self.robots['source'].name} (joints "
+            f"{self.joints['source']}): same_command, seed {babbling.seed}")
+        for side, client in self.reset_clients.items():   # same seed, same start, same pairs
+            answer = self.call(client, ResetRobot.Request(
+                positions=[float(q) for q in self.kinematics[side].home]))
+            if not answer.success:
+                raise RuntimeError(f"the {side} robot refused a reset: {answer.message}")
+        environments = {side: stepped_environment(self.kinematics[side], self.stepper(side),
+                                                  self.steps_per_sample)
+                        for side in self.robots}
+        pairs = collect_guided_correspondences(
+            babbling, environments["source"], environments["target"], self.joints["source"],
+            self.joints["target"], self.guided_seconds, on_pair=self.publish_pair,
+            should_stop=self.stop.is_set)
+        pairs.metadata.update(program=GUIDED)
+        return pairs
+
+    def run(self):
+        clients = list(self.step_clients.values()) + list(self.reset_clients.values()) \
+            + ([self.fit_client] if self.model_id else [])
+        wait_for_services(clients, self.wait_timeout, self.stop)
+        for topic, count in ((self.sample_pub.topic_name, self.wait_for_subscribers),
+                             *((topic, 1) for topic in self.subscribed_topics)):
+            wait_for_subscribers(self, topic, count, self.wait_timeout, self.stop)
+        source, target = self.robots["source"], self.robots["target"]
+        start = time.perf_counter()
+        pairs = self.collect_guided() if self.guided else self.collect()
         pairs.source_robot, pairs.target_robot = source.name, target.name
-        pairs.metadata.update(seed=self.program.seed, program=self.program.program,
-                              steps_per_sample=self.steps_per_sample)
+        pairs.metadata.update(steps_per_sample=self.steps_per_sample)
         wall = time.perf_counter() - start
         self.get_logger().info(
             f"collected {len(pairs)} pairs over {pairs.sim_time:.3f} s of simulated time in "

@@ -11,12 +11,18 @@ import pytest
 from lpa_transfer import inverse_kinematics
 from lpa_transfer.babbling import BabblingProgram, Kinematics, planar_kinematics
 from lpa_transfer.correspondences import (DEFAULT_FEATURES, FEATURES,
-                                          CorrespondenceSet, collect_correspondences,
-                                          feature_names, feature_vector, load_correspondences,
+                                          CorrespondenceSet, check_guided_exploration,
+                                          collect_correspondences,
+                                          collect_guided_correspondences, feature_names,
+                                          feature_vector, load_correspondences,
                                           planned_commands, run_commands)
 from lpa_transfer.kinematics import domain_data, end_effector_rmse
 from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.goal_babbling import GoalBabbling
+from lpa_transfer.guided_exploration import guided_exploration
+from lpa_transfer.kinematics import planar_forward_kinematics
+from lpa_transfer.robot_environment import stepped_environment
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from two_link import elbow_ik, robot
 
@@ -414,3 +420,164 @@ def test_load_correspondences_rejects_damaged_and_foreign_files(tmp_path):
     np.savez(tmp_path / "none.npz", x=np.ones(2))
     with pytest.raises(ValueError, match=r"lacks the arrays \['source', 'target'\]"):
         load_correspondences(tmp_path / "none.npz")
+
+
+# -- guided exploration (§6.4.2, Alg. 7) ------------------------------------------------------
+GB_HOME = [-0.785398, 1.65]                 # the Table 6.1 arms' home (the sims start there)
+GB_BOUNDS = ((0.1, -1.1), (1.1, 0.4))       # the target's X_bounds
+GB_STEPS = 100                              # physics steps a movement step (0.1 s)
+
+
+@pytest.fixture
+def gb_arms():
+    """gb_arms(side) -> (kinematics, stepped environment, recorder of its steps): an
+    in-process Table 6.1 arm (scenarios/robots/goal_babbling_<side>.toml) at home."""
+    sims = []
+
+    def make(side):
+        params = robot(f"goal_babbling_{side}")
+        kinematics = planar_kinematics(params, GB_HOME)
+        sims.append(RobotSimulator(robot_urdf(params), initial_positions=GB_HOME))
+        recorder = Recorder(sims[-1])
+        return kinematics, stepped_environment(kinematics, recorder, GB_STEPS), recorder
+
+    yield make
+    for sim in sims:
+        sim.close()
+
+
+def guided(gb_arms, seconds=10.0, seed=2, **kwargs):
+    (source_kinematics, source, source_steps), (target_kinematics, target, target_steps) = \
+        gb_arms("source"), gb_arms("target")
+    pairs = collect_guided_correspondences(GoalBabbling(GB_BOUNDS, seed=seed), source, target,
+                                           [0, 1], [0, 1], seconds, **kwargs)
+    return pairs, (source_kinematics, source_steps), (target_kinematics, target_steps)
+
+
+def test_guided_collection_pairs_each_robots_observations_of_the_same_commands(gb_arms):
+    pairs, (source_kinematics, source), (target_kinematics, target) = guided(gb_arms)
+    assert pairs.source.shape == pairs.target.shape == (100, 4) and pairs.complete
+    assert pairs.pairing_rule == "same_command" and pairs.features == DEFAULT_FEATURES
+    assert pairs.sim_time == pytest.approx(10.0)
+    assert pairs.metadata["seed"] == 2 and pairs.metadata["guided_seconds"] == 10.0
+    np.testing.assert_array_equal(pairs.metadata["x_high"], GB_BOUNDS[1])
+    # Alg. 7: the target babbles first (from its home), then the source runs its commands.
+    assert len(target.commands) == 101 and len(source.commands) == 100
+    np.testing.assert_array_equal(target.commands[0], GB_HOME)
+    np.testing.assert_array_equal(source.commands, target.commands[1:])
+    # Each side's rows are what that robot reached, and x is its own kinematics of q̄.
+    for recorder, samples in ((source, pairs.source), (target, pairs.target)):
+        states = recorder.states[-100:]
+        np.testing.assert_array_equal(samples[:, :2], [state.positions for state in states])
+        np.testing.assert_array_equal(samples[:, 2:], [state.end_effector[:2]
+                                                       for state in states])
+    for kinematics, samples in ((source_kinematics, pairs.source),
+                                (target_kinematics, pairs.target)):
+        np.testing.assert_allclose(samples[:, 2:], kinematics.forward(samples[:, :2]),
+                                   atol=1e-6)
+    lag = np.abs(pairs.source[:, :2] - pairs.target[:, :2])
+    assert lag.max() < 0.3 and np.median(lag) < 0.02          # the same commands
+    assert np.abs(pairs.source[:, 2:] - pairs.target[:, 2:]).max() > 0.1   # other arms
+    # It is Alg. 7 of the library, bit for bit (fresh simulators, same seed).
+    expected = guided_exploration(GoalBabbling(GB_BOUNDS, seed=2), gb_arms("source")[1],
+                                  gb_arms("target")[1], [0, 1], [0, 1], 10.0)
+    np.testing.assert_array_equal(pairs.source, expected[0])
+    np.testing.assert_array_equal(pairs.target, expected[1])
+
+
+def test_guided_on_pair_sees_each_pair_as_the_source_executes_its_command(gb_arms):
+    seen = []
+    steps = {}
+
+    def on_pair(index, source_row, target_row):
+        seen.append((index, len(steps["source"].commands), len(steps["target"].commands),
+                     source_row.copy(), target_row.copy()))
+
+    (_, source, steps["source"]), (_, target, steps["target"]) = \
+        gb_arms("source"), gb_arms("target")
+    pairs = collect_guided_correspondences(GoalBabbling(GB_BOUNDS, seed=4), source, target,
+                                           [0, 1], [0, 1], 3.0, on_pair=on_pair)
+    assert [index for index, *_ in seen] == list(range(30))
+    assert [n for _, n, *_ in seen] == list(range(1, 31))      # right after command i
+    assert {n for _, _, n, *_ in seen} == {31}                 # the target had babbled
+    np.testing.assert_array_equal([row for *_, row, _ in seen], pairs.source)
+    np.testing.assert_array_equal([row for *_, row in seen], pairs.target)
+
+
+def test_guided_should_stop_pairs_only_the_commands_both_robots_executed(gb_arms):
+    steps = {}
+
+    def collect_until(side, n_commands):
+        (_, source, steps["source"]), (_, target, steps["target"]) = \
+            gb_arms("source"), gb_arms("target")
+        return collect_guided_correspondences(
+            GoalBabbling(GB_BOUNDS, seed=2), source, target, [0, 1], [0, 1], 10.0,
+            should_stop=lambda: len(steps[side].commands) >= n_commands)
+
+    pairs = collect_until("source", 30)          # stopped while the source replays
+    assert not pairs.complete and pairs.source.shape == pairs.target.shape == (30, 4)
+    assert pairs.sim_time == pytest.approx(3.0)
+    assert len(steps["source"].commands) == 30 and len(steps["target"].commands) == 101
+    np.testing.assert_array_equal(pairs.target[:, :2], positions(steps["target"])[:30])
+    full, _, _ = guided(gb_arms)
+    np.testing.assert_array_equal(pairs.source, full.source[:30])
+    np.testing.assert_array_equal(pairs.target, full.target[:30])
+    pairs = collect_until("target", 50)          # stopped while the target babbles
+    assert not pairs.complete and len(pairs) == 0 and pairs.sim_time == 0
+    assert len(steps["target"].commands) == 50 and steps["source"].commands == []
+
+
+def test_guided_kinematic_environments_share_q_and_hold_other_joints_at_home():
+    """A 3-joint target whose first joint the 2-joint source lacks (as Poppy's torso)."""
+    links, home = (0.2, 0.7, 0.4), np.array([0.3, -0.6, 1.5])
+    sent = []
+
+    def torso_forward(q):
+        sent.extend(np.atleast_2d(q))
+        return planar_forward_kinematics(q, links)
+
+    torso = Kinematics(np.array([(-0.5, 0.5), (-1.2, 0.3), (0.4, 2.9)]), home, torso_forward)
+    arm = Kinematics(np.array([(-np.pi / 2, 0.0), (0.4, 2.9)]), np.array([-0.7, 1.6]),
+                     lambda q: planar_forward_kinematics(q, (0.5, 0.5)))
+    pairs = collect_guided_correspondences(GoalBabbling(GB_BOUNDS, seed=1), arm, torso,
+                                           [0, 1], [1, 2], 5.0)
+    assert pairs.source.shape == pairs.target.shape == (50, 4)
+    np.testing.assert_array_equal(pairs.source[:, :2], pairs.target[:, :2])
+    assert (pairs.source[:, :2] >= [-1.2, 0.4]).all()        # the shared ranges
+    assert (pairs.source[:, :2] <= [0.0, 2.9]).all()
+    np.testing.assert_array_equal(np.array(sent)[:, 0], 0.3)  # the torso stays at home
+    assert list(pairs.metadata["target_joints"]) == [1, 2]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(seconds=-1.0), "seconds must be a finite number >= 0"),
+    (dict(target_joints=[0]), "pair the shared joints one to one"),
+    (dict(target_joints=[0, 2]), "distinct joint indices in \\[0, 2\\)"),
+    (dict(x_bounds=((1.1, -1.1), (0.1, 0.4))), "x_bounds must be finite"),
+])
+def test_guided_bad_arguments_raise_before_any_step(kwargs, message):
+    def never(q):
+        raise AssertionError("a robot moved")
+
+    arm = Kinematics(np.array([(-np.pi / 2, 0.0), (0.4, 2.9)]), np.array([-0.7, 1.6]), never)
+    args = {**dict(seconds=1.0, target_joints=[0, 1], x_bounds=GB_BOUNDS), **kwargs}
+    with pytest.raises(ValueError, match=message):
+        collect_guided_correspondences(GoalBabbling(args["x_bounds"]), arm, arm, [0, 1],
+                                       args["target_joints"], args["seconds"])
+
+
+@pytest.mark.parametrize("babbling, message", [
+    (GoalBabbling(((0.1, -1.1, 0.0), (1.1, 0.4, 1.0))), "x_bounds have 3 coordinates"),
+    (GoalBabbling(GB_BOUNDS, home=[0.5, 1.0]), "home .* lies outside the joint limits"),
+    (GoalBabbling(GB_BOUNDS, sigma=-0.1), "sigma must be a finite number >= 0"),
+    (GoalBabbling(GB_BOUNDS, p_home=2.0), "need p_home <= 1"),
+])
+def test_check_guided_exploration_finds_what_would_fail_on_the_robots(babbling, message):
+    source = planar_kinematics(robot("goal_babbling_source"), GB_HOME)
+    target = planar_kinematics(robot("goal_babbling_target"), GB_HOME)
+    limits = check_guided_exploration(GoalBabbling(GB_BOUNDS), source, target, [0, 1],
+                                      [0, 1], 10.0)
+    np.testing.assert_allclose(limits, [(-np.pi / 2, 0.0), (0.4, 2.9)])
+    with pytest.raises(ValueError, match=message):
+        check_guided_exploration(babbling, source, target, [0, 1], [0, 1], 10.0)
+    assert not hasattr(babbling, "model_")                  # the given one is not started

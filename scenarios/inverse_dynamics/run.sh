@@ -21,16 +21,6 @@ OUT=$ROOT/runs/inverse_dynamics
 SCENARIO=inverse_dynamics
 source "$ROOT/scenarios/lib/graph.sh"
 
-experiment_list() {   # a list parameter of the experiment node (the last file setting it wins)
-    python - "$1" "${CONFIGS[@]}" <<'PY'
-import sys, yaml
-key, value = sys.argv[1], None
-for path in sys.argv[2:]:
-    value = (yaml.safe_load(open(path)).get("experiment") or {}).get(
-        "ros__parameters", {}).get(key, value)
-print(*value)
-PY
-}
 SEEDS=$(experiment_list seeds)
 STARS=$(experiment_list stars)
 START=$(date +%s.%N)

@@ -44,7 +44,7 @@ from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
                                          TransferPoints)
-from lpa_transfer_nodes._ros_util import (call_service, from_matrix, run_job,  # noqa: E402
+from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
                                           to_matrix, wait_for_services)
 
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
@@ -76,24 +76,13 @@ class Experiment(Node):
         self.timeout = float(declare("call_timeout", 600.0))
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
-        self.service_clients = {}
+        self.services = ServiceCalls(self, self.spinner, self.timeout, stop)
+        self.client, self.call = self.services.client, self.services.call
         self.traces = {}
         for robot in self.robots:
             self.create_subscription(TrialResult, f"/{robot}/trial_result", self.on_trial, 50)
         self.recording = None
         self.done_seeds = []
-
-    def client(self, srv_type, name):
-        if name not in self.service_clients:
-            self.service_clients[name] = self.create_client(srv_type, name)
-        return self.service_clients[name]
-
-    def call(self, srv_type, name, **fields):
-        answer = call_service(self.spinner, self.client(srv_type, name), srv_type.Request(
-            **fields), self.timeout, self.stop)
-        if not answer.success:
-            raise RuntimeError(f"{name} failed: {answer.message}")
-        return answer
 
     def on_trial(self, msg):
         if self.recording is not None:

@@ -2,7 +2,7 @@
 # and SCENARIO, a name): argument parsing, the run directory, the ROS environment, and
 # starting/stopping every node as its own process with its own log.
 # Sets PARAMS (--ros-args --params-file CONFIG [--params-file OVERRIDE]...) and CONFIGS (the
-# files in that order: later ones override); provides start, step, stop_all.
+# files in that order: later ones override); provides experiment_list, start, step, stop_all.
 OVERRIDES=()
 while [ $# -gt 0 ]; do
     case $1 in
@@ -25,6 +25,17 @@ export ROS_LOG_DIR=$OUT/logs/ros PYTHONUNBUFFERED=1
 cd "$ROOT"
 PARAMS=(--ros-args)
 for file in "${CONFIGS[@]}"; do PARAMS+=(--params-file "$file"); done
+
+experiment_list() {   # a list parameter of the experiment node (the last file setting it wins)
+    python - "$1" "${CONFIGS[@]}" <<'PY'
+import sys, yaml
+key, value = sys.argv[1], None
+for path in sys.argv[2:]:
+    value = (yaml.safe_load(open(path)).get("experiment") or {}).get(
+        "ros__parameters", {}).get(key, value)
+print(*value)
+PY
+}
 
 # Every process gets its own session (setsid), so Ctrl-C reaches only this script, which then
 # stops them in order: the running step first, then the nodes in reverse start order, the

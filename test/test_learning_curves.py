@@ -1,0 +1,32 @@
+"""Time to reach a level and time saved (lpa_transfer.learning_curves, thesis §6.5)."""
+import numpy as np
+import pytest
+
+from lpa_transfer.learning_curves import time_saved, time_to_reach
+
+TIMES = np.array([300.0, 600.0, 900.0, 1200.0, 1500.0])
+
+
+def test_time_to_reach_is_the_first_sample_at_the_level():
+    assert time_to_reach(TIMES, [0.2, 0.5, 0.81, 0.7, 0.9], 0.81) == 900.0
+    assert time_to_reach(TIMES, [0.05, 0.03, 0.02, 0.01, 0.01], 0.02,
+                         higher_is_better=False) == 900.0
+    assert time_to_reach(TIMES, [0.1, 0.2, 0.3, 0.4, 0.5], 0.6) == np.inf
+
+
+def test_time_saved_reads_like_the_thesis_poppy_example():
+    scratch = np.linspace(0.3, 0.81, 17)
+    scratch_times = 300.0 * np.arange(1, 18)     # reaches 0.81 at its end, 5100 s
+    level, t_scratch, t, saved = time_saved(scratch_times, scratch, TIMES,
+                                            [0.5, 0.7, 0.79, 0.80, 0.81])
+    assert (level, t_scratch, t) == (0.81, 5100.0, 1500.0)
+    assert saved == pytest.approx(1 - 1500 / 5100)
+    *_, never = time_saved(scratch_times, scratch, TIMES, [0.5] * 5)
+    assert never == -np.inf
+
+
+@pytest.mark.parametrize("times, values", [([1.0, 1.0], [0.1, 0.2]), ([1.0, 2.0], [0.1]),
+                                           ([1.0, 2.0], [0.1, np.nan]), ([], [])])
+def test_bad_curves_are_refused(times, values):
+    with pytest.raises(ValueError):
+        time_to_reach(times, values, 0.5)
