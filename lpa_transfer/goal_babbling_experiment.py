@@ -84,9 +84,11 @@ class Curves(NamedTuple):
 
 
 def derived_seeds(seed):
-    """Independent integer seeds (source babbling, target babbling, LPA) from one seed."""
+    """Independent integer seeds from one run seed: source babbling, target babbling, LPA,
+    and the target's babbling after a transfer where it cannot continue the guided
+    exploration's babbling (over the node graph the learner restarts its babbler)."""
     check.check_int(seed, "seed", 0)
-    return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(3)]
+    return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
 
 
 def _babbler(config, environment, seed):

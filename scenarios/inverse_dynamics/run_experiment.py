@@ -76,8 +76,8 @@ class Experiment(Node):
         self.timeout = float(declare("call_timeout", 600.0))
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
-        self.services = ServiceCalls(self, self.spinner, self.timeout, stop)
-        self.client, self.call = self.services.client, self.services.call
+        self.calls = ServiceCalls(self, self.spinner, self.timeout, stop)
+        self.client, self.call = self.calls.client, self.calls.call
         self.traces = {}
         for robot in self.robots:
             self.create_subscription(TrialResult, f"/{robot}/trial_result", self.on_trial, 50)

@@ -1,0 +1,413 @@
+"""goal_babbling_learner: online goal babbling of one robot (thesis ch. 6, Alg. 6, §6.4, §6.5).
+
+Run (next to a robot_sim in position mode, lock-step, in the same namespace):
+``goal_babbling_learner --ros-args -r __ns:=/target
+-p robot:=scenarios/robots/goal_babbling_target.toml -p home:=[-0.785398,1.65]
+-p x_low:=[0.1,-1.1] -p x_high:=[1.1,0.4]``.
+
+The node is the rclpy adapter of one learner of :func:`lpa_transfer.goal_babbling_experiment.
+run_condition`: online goal babbling (Alg. 6, :class:`lpa_transfer.goal_babbling.GoalBabbling`)
+on the robot through its StepRobot service (:func:`lpa_transfer.robot_environment.
+stepped_environment`: every command runs ``steps_per_sample`` physics steps in position mode,
+and the model learns the OBSERVED joint positions and end effector), into a K-nearest-neighbour
+inverse model L⁻¹ (:mod:`lpa_transfer.sensorimotor`, K = 3 in §6.5). The model can be
+initialised offline (§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration)
+and with experience transferred from another robot, optionally behind the guard against
+negative transfer (:class:`lpa_transfer.negative_transfer.GuardedModel`, §6.6). Progress is
+measured as in §6.5 (:mod:`lpa_transfer.reaching`): the mean reaching error and the reaching
+rate of L⁻¹ on test points evenly spread through the reachable part of a task box, executed on
+the robot's ANALYTIC forward kinematics (evaluating never moves the simulated robot, so it
+does not disturb babbling).
+
+The learner's clock (s of simulated exploration, the x axis of the thesis' learning curves)
+starts at 0; ``initialise`` advances it by the ``elapsed`` time its own samples took (e.g.
+T_guided) and babbling by ``1 / steps_per_second`` per step.
+
+Parameters:
+
+* ``robot`` (required): the robot parameter file (joint limits and analytic kinematics;
+  planar chains learn (x, y), serial chains world (x, y, z)).
+* ``home`` (double array, default zero clipped into the joint limits): q_home, where babbling
+  starts and returns to (:class:`~lpa_transfer.goal_babbling.GoalBabbling`).
+* ``x_low``, ``x_high`` (double arrays, required): X_bounds, the task box goals are drawn
+  from (m).
+* GoalBabbling's hyperparameters: ``n_subtargets`` (T, 10), ``sigma`` (0.1), ``drift``
+  (0.01), ``p_home`` (0.1), ``steps_per_second`` (10.0), ``seed`` (0). The same parameters
+  and the same calls give the same experience, bit for bit.
+* ``steps_per_sample`` (100): physics steps per babbling step. One babbling step should last
+  1 / ``steps_per_second`` simulated seconds, i.e. ``steps_per_sample`` · ``physics_step``
+  (s, 0.001, the simulator's); a warning is logged if they disagree.
+* ``n_neighbors`` (3): K of the inverse model.
+* ``guard`` (bool, false): take transferred samples into a GuardedModel (lower weight, retired
+  once covered or contradicted by own data) instead of learning them like own data (as the
+  thesis does); ``guard_params`` (JSON object string, ``'{}'``): GuardedModel's
+  hyperparameters (``transferred_weight``, ``coverage_radius``, ``coverage_count``,
+  ``disagreement_threshold``, ``lipschitz``, ``n_checked``). ``lipschitz`` defaults to
+  :func:`~lpa_transfer.negative_transfer.planar_lipschitz` of a planar robot's links; for
+  other robots it is required when ``guard`` is true.
+* ``eval_low``, ``eval_high`` (double arrays, default X_bounds): the box of the test points;
+  ``eval_spacing`` (m, 0.05): their grid spacing (:func:`lpa_transfer.reaching.
+  evaluation_points`; computed once at start-up, the node does not start without any);
+  ``reaching_threshold`` (m, 0.01, §6.5.1).
+* ``step_service``, ``reset_service`` (default ``robot_sim/step``, ``robot_sim/reset``,
+  resolved in the node's namespace); ``call_timeout`` (s, 30) for each robot call;
+  ``wait_timeout`` (s, 30) for the robot's services.
+
+Services:
+
+* ``~/initialise`` (InitialiseSensorimotor): with ``reset``, first put the robot at rest at
+  q_home, and start afresh (a new model, the clock at 0, babbling restarts at the next
+  ``babble``, seeded by the request's ``seed``, or by the parameter if it is -1). Then learn the ``own`` rows (q, x) with weight 1, then the ``transferred`` rows
+  (guarded: as transferred samples; unguarded: like own data), advance the clock by
+  ``elapsed``, and answer (and publish) an evaluation. Rows need n_joints + task-dimension
+  columns; rows with NaN/inf are rejected and counted, never learned. A model without any
+  sample is evaluated as ``mean_error`` NaN, ``reaching_rate`` 0.
+* ``~/babble`` (GoalBabble): goal-babble ``seconds`` on the robot, one GoalBabbling run
+  continued across calls (the first call after start-up or a reset puts the robot at rest at
+  q_home and starts it: L⁻¹ learns the (q_home, x_home) observed there, Alg. 6 l. 4). The model
+  is evaluated whenever the learner's clock reaches a multiple of ``evaluation_interval``
+  (0: never) and at the end (once, if the end is such a multiple). Answers the evaluations,
+  the experience of the call (observed q, x per step; not the home sample of a start) and the
+  robot's simulated time. SIGINT/SIGTERM stop babbling within a step (success false); what
+  was learned until then stays learned, as it does when a call fails midway.
+
+Bad requests are answered with ``success=false`` and a message; the node keeps serving.
+
+Topic: ``reaching_evaluation`` (ReachingEvaluation, every evaluation of either service;
+header stamp = the robot's simulated time at the evaluation, or the last one known, frame
+``world``).
+"""
+import json
+import math
+import os
+
+import numpy as np
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+from lpa_transfer.babbling import robot_kinematics
+from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
+from lpa_transfer.negative_transfer import GuardedModel, planar_lipschitz
+from lpa_transfer.reaching import evaluate_reaching, evaluation_points
+from lpa_transfer.robot_environment import stepped_environment, task_dims
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.sensorimotor import make_sensorimotor_model
+from lpa_transfer_interfaces.msg import ReachingEvaluation
+from lpa_transfer_interfaces.srv import (GoalBabble, InitialiseSensorimotor, ResetRobot,
+                                         StepRobot)
+from lpa_transfer_nodes._ros_util import (ServiceTimeout, answering, array_parameter,
+                                          call_service, from_matrix, robot_stepper, serve,
+                                          sim_stamp, sim_state, to_matrix, wait_for_services)
+
+#: Every evaluation should reach its subscribers, even many in one babble call.
+EVALUATION_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+GUARD_KEYS = ("transferred_weight", "coverage_radius", "coverage_count",
+              "disagreement_threshold", "lipschitz", "n_checked")
+
+
+class Stopped(ValueError):
+    """SIGINT/SIGTERM arrived during a call (answered as a failed request)."""
+
+
+class GoalBabblingLearner(Node):
+    def __init__(self, stop):
+        super().__init__("goal_babbling_learner")
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        doubles = lambda name: array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)  # noqa: E731,E501
+        self.stop = stop
+        path = declare("robot", "")
+        if not path:
+            raise ValueError("the parameter 'robot' (a robot .toml file) is required")
+        self.robot = load_robot_params(os.path.expanduser(path))
+        self.kinematics = robot_kinematics(self.robot, doubles("home") or None)
+        self.n_task = task_dims(self.kinematics)
+        x_low, x_high = doubles("x_low"), doubles("x_high")
+        if not x_low or not x_high:
+            raise ValueError("the parameters 'x_low' and 'x_high' (X_bounds, the task box goals "
+                             "are drawn from) are required")
+        self.x_bounds = check_x_bounds((x_low, x_high), self.n_task)
+        self.babbling_params = dict(
+            n_subtargets=declare("n_subtargets", 10), sigma=float(declare("sigma", 0.1)),
+            drift=float(declare("drift", 0.01)), p_home=float(declare("p_home", 0.1)),
+            steps_per_second=float(declare("steps_per_second", 10.0)), seed=declare("seed", 0))
+        self.steps_per_sample = declare("steps_per_sample", 100)
+        physics_step = float(declare("physics_step", 0.001))
+        self.n_neighbors = declare("n_neighbors", 3)
+        self.guard = self.guard_spec(declare("guard", False), declare("guard_params", "{}"))
+        eval_bounds = (doubles("eval_low") or self.x_bounds[0],
+                       doubles("eval_high") or self.x_bounds[1])
+        eval_spacing = float(declare("eval_spacing", 0.05))
+        self.threshold = float(declare("reaching_threshold", 0.01))
+        self.call_timeout = float(declare("call_timeout", 30.0))
+        self.wait_timeout = float(declare("wait_timeout", 30.0))
+        self.check_hyperparameters(physics_step)
+        self.points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
+                                        spacing=eval_spacing)
+        if not len(self.points):
+            raise ValueError(f"no test points: no point of the grid of {eval_spacing:g} m over "
+                             f"the box {np.round(eval_bounds, 6).tolist()} is reachable (check "
+                             f"eval_low/eval_high, x_low/x_high and eval_spacing)")
+        # Robot calls happen inside service callbacks: a client node of their own, spun by
+        # its own executor, so the callback never re-enters this node's executor.
+        self.robot_node = rclpy.create_node(  # no command-line remaps (__node would rename it)
+            f"{self.get_name()}_robot_client", namespace=self.get_namespace(),
+            use_global_arguments=False)
+        self.robot_spinner = SingleThreadedExecutor()
+        self.robot_spinner.add_node(self.robot_node)
+        self.step_client = self.robot_node.create_client(
+            StepRobot, declare("step_service", "robot_sim/step"))
+        self.reset_client = self.robot_node.create_client(
+            ResetRobot, declare("reset_service", "robot_sim/reset"))
+        self.environment = stepped_environment(
+            self.kinematics, robot_stepper(self.call, self.step_client, self.robot.name),
+            self.steps_per_sample, on_sample=self.on_sample)
+        self.sim_time = 0.0
+        self.start_afresh()
+        self.evaluation_pub = self.create_publisher(ReachingEvaluation, "reaching_evaluation",
+                                                    EVALUATION_QOS)
+        self.create_service(InitialiseSensorimotor, "~/initialise",
+                            answering(self, "initialise", self.initialise))
+        self.create_service(GoalBabble, "~/babble", answering(self, "babble", self.babble))
+        self.get_logger().info(
+            f"{self.robot.name}: goal babbling in X_bounds {self.x_bounds[0].tolist()} .. "
+            f"{self.x_bounds[1].tolist()} from home {self.kinematics.home.tolist()}, "
+            f"{len(self.points)} test points, "
+            + ("guarded " if self.guard is not None else "") + f"{self.n_neighbors}-NN model")
+
+    # -- configuration -------------------------------------------------------------------------
+    def guard_spec(self, guard, text):
+        """GuardedModel's hyperparameters when ``guard`` is set (None otherwise)."""
+        try:
+            params = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"guard_params must be a JSON object: {exc}") from None
+        if not isinstance(params, dict):
+            raise ValueError(f"guard_params must be a JSON object, got {text!r}")
+        unknown = sorted(set(params) - set(GUARD_KEYS))
+        if unknown:
+            raise ValueError(f"guard_params: unknown {unknown}; known: {list(GUARD_KEYS)}")
+        if not guard:
+            if params:
+                self.get_logger().warning("guard_params are ignored: guard is false")
+            return None
+        if "lipschitz" not in params:
+            if self.robot.kind != "planar":
+                raise ValueError(f"guard_params needs 'lipschitz' (an upper bound of the "
+                                 f"Jacobian's norm, m/rad) for the {self.robot.kind} robot "
+                                 f"{self.robot.name}")
+            params["lipschitz"] = planar_lipschitz(self.robot.link_lengths)
+        return params
+
+    def check_hyperparameters(self, physics_step):
+        """Fail at start-up, not at the first call, on bad hyperparameters: build a model and
+        start a GoalBabbling on the analytic kinematics (no robot involved)."""
+        if isinstance(self.steps_per_sample, bool) or not isinstance(self.steps_per_sample, int) \
+                or self.steps_per_sample < 1:
+            raise ValueError(f"steps_per_sample must be an integer >= 1, got "
+                             f"{self.steps_per_sample!r}")
+        if not (physics_step > 0 and math.isfinite(physics_step)):
+            raise ValueError(f"physics_step must be a finite number > 0, got {physics_step}")
+        for name, value in (("reaching_threshold", self.threshold),
+                            ("call_timeout", self.call_timeout),
+                            ("wait_timeout", self.wait_timeout)):
+            if not (value >= 0 and math.isfinite(value)):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+        GoalBabbling(self.x_bounds, home=self.kinematics.home, **self.babbling_params).start(
+            self.kinematics, self.fresh_model())
+        step_seconds = self.steps_per_sample * physics_step
+        per_second = self.babbling_params["steps_per_second"]
+        if not math.isclose(step_seconds * per_second, 1.0, rel_tol=1e-9):
+            self.get_logger().warning(
+                f"a babbling step runs {self.steps_per_sample} physics steps of {physics_step:g} "
+                f"s = {step_seconds:g} s on the robot, but the learner's clock counts "
+                f"1 / steps_per_second = {1 / per_second:g} s per step")
+
+    def babbler(self):
+        """A fresh GoalBabbling with the node's hyperparameters."""
+        return GoalBabbling(self.x_bounds, home=self.kinematics.home,
+                            **dict(self.babbling_params, seed=self.seed))
+
+    def fresh_model(self):
+        """A sensorimotor model that knows nothing yet (inverse only, K-NN; guarded or not)."""
+        model = make_sensorimotor_model("knn", forward=False, n_neighbors=self.n_neighbors)
+        return model if self.guard is None else GuardedModel(model, **self.guard)
+
+    def start_afresh(self, seed=-1):
+        """A new model, the clock at 0, babbling (with ``seed``; -1: the seed parameter) to be
+        started by the next babble call."""
+        self.seed = self.babbling_params["seed"] if seed == -1 else seed
+        self.model, self.babbling = self.fresh_model(), None
+        self.clock_offset = 0.0   # learner's clock = clock_offset + babbling time
+        self.n_transferred = 0    # transferred samples learned like own data (unguarded)
+
+    # -- robot -----------------------------------------------------------------------------------
+    def call(self, client, request):
+        try:
+            return call_service(self.robot_spinner, client, request, self.call_timeout,
+                                self.stop)
+        except ServiceTimeout:
+            if self.stop.is_set():
+                raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot's "
+                              "answer") from None
+            raise
+
+    def on_sample(self, command, state):
+        self.sim_time = state.time
+
+    def wait_for_robot(self):
+        try:
+            wait_for_services([self.step_client, self.reset_client], self.wait_timeout,
+                              self.stop)
+        except ServiceTimeout:
+            if not self.stop.is_set():
+                raise
+        if self.stop.is_set():
+            raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot")
+
+    def reset_robot(self):
+        """Put the robot at rest at q_home."""
+        answer = self.call(self.reset_client, ResetRobot.Request(
+            positions=[float(q) for q in self.kinematics.home]))
+        if not answer.success:
+            raise RuntimeError(f"the robot refused a reset: {answer.message}")
+        self.sim_time = sim_state(answer).time
+
+    # -- services --------------------------------------------------------------------------------
+    @property
+    def clock(self):
+        """The learner's clock (s)."""
+        return self.clock_offset + (self.babbling.time_ if self.babbling is not None else 0.0)
+
+    def rows(self, matrix, name):
+        """(finite rows (N, d + m), number of rejected rows) of a Matrix; ValueError for a
+        wrong number of columns (a matrix without rows may have any)."""
+        values = from_matrix(matrix, name)
+        width = self.robot.n_joints + self.n_task
+        if not len(values):
+            return values.reshape(0, width), 0
+        if values.shape[1] != width:
+            raise ValueError(f"{name} needs {self.robot.n_joints} joint + {self.n_task} task = "
+                             f"{width} columns (q, x), got {values.shape[1]}")
+        finite = np.isfinite(values).all(axis=1)
+        return values[finite], int(np.count_nonzero(~finite))
+
+    def initialise(self, request, response):
+        own, rejected_own = self.rows(request.own, "own")
+        transferred, rejected_transferred = self.rows(request.transferred, "transferred")
+        elapsed = request.elapsed
+        if not (math.isfinite(elapsed) and elapsed >= 0):
+            raise ValueError(f"elapsed must be a finite number >= 0 (s), got {elapsed}")
+        if request.seed < -1:
+            raise ValueError(f"seed must be >= 0, or -1 for the seed parameter, got "
+                             f"{request.seed}")
+        if request.reset:
+            self.wait_for_robot()
+            self.reset_robot()
+            self.start_afresh(request.seed)
+        d = self.robot.n_joints
+        if len(own):
+            self.model.update(own[:, :d], own[:, d:])
+        if len(transferred):
+            if self.guard is not None:
+                self.model.transfer(transferred[:, :d], transferred[:, d:])
+            else:   # like own data, weight 1 (§6.4, §6.5.1)
+                self.model.update(transferred[:, :d], transferred[:, d:])
+                self.n_transferred += len(transferred)
+        self.clock_offset += elapsed
+        response.n_own, response.n_transferred = len(own), len(transferred)
+        response.n_rejected = rejected_own + rejected_transferred
+        response.evaluation = self.evaluate()
+        return (f"learned {len(own)} own and {len(transferred)} transferred samples, rejected "
+                f"{response.n_rejected}; " + self.describe(response.evaluation))
+
+    def babble(self, request, response):
+        seconds, interval = request.seconds, request.evaluation_interval
+        for name, value in (("seconds", seconds), ("evaluation_interval", interval)):
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0 (s), got {value}")
+        self.wait_for_robot()
+        if self.babbling is None:
+            self.reset_robot()
+            self.babbling = self.babbler().start(self.environment, self.model)
+        per_second = self.babbling.steps_per_second
+        n_steps = int(round(seconds * per_second))   # as GoalBabbling.run_for
+        evaluations, done = [], [0]
+
+        def multiples(clock):   # of the interval reached by the clock (float-safe)
+            return math.floor(clock / interval + 1e-9) if interval > 0 else 0
+
+        last = [multiples(self.clock)]
+
+        def after_step(babbling):   # the learner's clock, not the babbler's, sets the times
+            done[0] += 1
+            if self.stop.is_set():
+                raise Stopped()
+            reached = multiples(self.clock)
+            if reached > last[0]:
+                last[0] = reached
+                evaluations.append(self.evaluate())
+            elif done[0] == n_steps:
+                evaluations.append(self.evaluate())
+
+        try:
+            positions, points = self.babbling.run(n_steps, after_step, 1)
+        except Stopped:   # between two steps or waiting for the robot's answer
+            raise Stopped(f"stopped (SIGINT/SIGTERM) after {done[0]} of {n_steps} steps; "
+                          f"they stay learned") from None
+        if not n_steps:
+            evaluations.append(self.evaluate())
+        response.evaluations = evaluations
+        response.experience = to_matrix(np.hstack((positions, points)))
+        response.sim_time = self.sim_time
+        return (f"babbled {n_steps} steps to t = {self.clock:g} s; "
+                + self.describe(evaluations[-1]))
+
+    # -- evaluation ----------------------------------------------------------------------------
+    def counts(self):
+        """(own samples, active transferred samples) in the inverse model."""
+        if isinstance(self.model, GuardedModel):
+            own = getattr(self.model.model.inverse, "n_samples_", 0)
+            return own, self.model.n_active_
+        total = getattr(self.model.inverse, "n_samples_", 0)
+        return total - self.n_transferred, self.n_transferred
+
+    def evaluate(self):
+        """Evaluate L⁻¹ on the test points (analytic kinematics) and publish the result."""
+        n_own, n_transferred = self.counts()
+        if n_own + n_transferred:
+            reaching = evaluate_reaching(self.model.inverse, self.kinematics, self.points,
+                                         self.threshold)
+            mean_error, rate = reaching.mean_error, reaching.rate
+        else:   # nothing learned yet: no command to evaluate
+            mean_error, rate = math.nan, 0.0
+        msg = ReachingEvaluation(
+            robot=self.robot.name, learning_time=float(self.clock), mean_error=float(mean_error),
+            reaching_rate=float(rate), reaching_threshold=self.threshold,
+            n_test_points=len(self.points), n_own_samples=int(n_own),
+            n_transferred_samples=int(n_transferred))
+        msg.header.stamp, msg.header.frame_id = sim_stamp(self.sim_time), "world"
+        self.evaluation_pub.publish(msg)
+        self.get_logger().info(f"t = {self.clock:g} s: " + self.describe(msg))
+        return msg
+
+    @staticmethod
+    def describe(evaluation):
+        return (f"mean reaching error {1e3 * evaluation.mean_error:.1f} mm, reaching rate "
+                f"{100 * evaluation.reaching_rate:.1f} % ({evaluation.n_own_samples} own, "
+                f"{evaluation.n_transferred_samples} transferred samples)")
+
+    def destroy_node(self):
+        self.robot_spinner.shutdown()
+        self.robot_node.destroy_node()
+        super().destroy_node()
+
+
+def main(args=None):
+    serve("goal_babbling_learner", GoalBabblingLearner, args)
+
+
+if __name__ == "__main__":
+    main()

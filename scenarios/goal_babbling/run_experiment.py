@@ -1,0 +1,302 @@
+#!/usr/bin/env python3
+"""Thesis §6.5.1 over the node graph: does transfer accelerate goal babbling?
+
+Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML). Running:
+two robot_sim nodes in position mode (``/source``, ``/target``), a goal_babbling_learner for
+the source (``/source/learner``), two for the target (``/target/learner`` as the thesis, and
+``/target/guarded_learner`` with the guard against negative transfer), ``lpa_mapping`` and the
+recorder; correspondence_collector has run guided exploration (Alg. 7) for every seed, for the
+longest T_guided, and saved the pairs (one file per seed, in the order of ``seeds``). A
+shorter T_guided uses the first T_guided · steps_per_second pairs: with the same seed and the
+robots reset to home the collection is deterministic, so that prefix is what a shorter run
+would have collected.
+
+For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling_experiment.derived_seeds`):
+
+1. The source goal-babbles for ``source_seconds`` from scratch; its experience ξ_s is kept.
+2. ``scratch``: the target goal-babbles for ``total_seconds``, evaluated every ``interval`` s.
+3. For every T_guided and method (PA, LPA): the mapping service fits the method on the first
+   T_guided s of guided-exploration pairs (q̄, x_s) -> (q̄, x_t); ξ_s is transferred through it
+   and padded with the target's home for joints the source lacks (§6.4.1); the target learner
+   is reset and initialised with its own guided samples and the transferred ones, its clock at
+   T_guided, and goal-babbles for the rest of ``total_seconds`` (with a seed of its own: the
+   learner restarts its babbler, and the guided exploration's goals should not repeat). With ``guarded``, the same
+   again on the guarded learner.
+
+Writes into ``output_dir`` after every seed: ``results.json``, ``learning_curves.csv``,
+``fig6_5_task_spaces.png``, ``fig6_6_7_learning_curves.png`` (reaching error and rate, mean ±
+std over seeds, one column per method) and ``report.txt`` (time to reach the scratch
+learner's final reaching rate, time saved).
+"""
+import csv
+import json
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+
+from lpa_transfer.babbling import robot_kinematics  # noqa: E402
+from lpa_transfer.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.goal_babbling_experiment import derived_seeds  # noqa: E402
+from lpa_transfer.guided_exploration import pad_transferred  # noqa: E402
+from lpa_transfer.kinematics import sample_joint_uniform  # noqa: E402
+from lpa_transfer.learning_curves import time_saved  # noqa: E402
+from lpa_transfer.reaching import evaluation_points  # noqa: E402
+from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer_interfaces.srv import (FitModel, GoalBabble,  # noqa: E402
+                                         InitialiseSensorimotor, TransferPoints)
+from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
+                                          to_matrix, wait_for_services)
+
+SETTINGS = ("seeds_done", "source_seconds", "total_seconds", "guided_seconds", "interval",
+            "methods", "guarded", "reaching_threshold")
+THESIS = ("thesis §6.5.1 (Fig. 6-6/6-7, read from the text): transfer boosts learning at "
+          "once; LPA helps the final performance when applied at 180 s and beyond, and "
+          "transfers negatively from 60 s of guided exploration; PA transfers negatively")
+
+
+class Experiment(Node):
+    def __init__(self, stop):
+        super().__init__("experiment")
+        self.stop = stop
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        self.robot_files = {side: declare(f"{side}_robot", "") for side in ("source", "target")}
+        self.robots = {side: load_robot_params(path) for side, path in self.robot_files.items()}
+        self.target_home = list(declare("target_home", [0.0]))
+        self.joints = {side: list(declare(f"{side}_joints", [0, 1]))
+                       for side in ("source", "target")}
+        self.seeds = list(declare("seeds", [0]))
+        self.source_seconds = float(declare("source_seconds", 1000.0))
+        self.total_seconds = float(declare("total_seconds", 1000.0))
+        self.guided_seconds = [float(t) for t in declare("guided_seconds", [60.0])]
+        self.interval = float(declare("interval", 60.0))
+        self.steps_per_second = float(declare("steps_per_second", 10.0))
+        self.methods = list(declare("methods", ["pa", "lpa"]))
+        self.guarded = bool(declare("guarded", True))
+        self.reaching_threshold = float(declare("reaching_threshold", 0.01))
+        self.fit = dict(latent_dim=declare("latent_dim", 0), n_min=declare("n_min", 7),
+                        c_min=declare("c_min", 1e-7))
+        self.x_bounds = (declare("x_low", [0.0]), declare("x_high", [0.0]))
+        self.eval_spacing = float(declare("eval_spacing", 0.05))
+        self.output_dir = Path(declare("output_dir", "."))
+        if not 0 < max(self.guided_seconds) <= self.total_seconds:
+            raise ValueError(f"guided_seconds must lie in (0, total_seconds], got "
+                             f"{self.guided_seconds}")
+        self.spinner = SingleThreadedExecutor()
+        self.spinner.add_node(self)
+        self.calls = ServiceCalls(self, self.spinner, float(declare("call_timeout", 1800.0)),
+                                     stop)
+        self.call = self.calls.call
+        self.seeds_done = []
+
+    # -- one learner run ---------------------------------------------------------------------
+    def learn(self, learner, seed, seconds, own=None, transferred=None, elapsed=0.0):
+        """Reset ``learner``, initialise it, babble: (times, errors, rates, experience)."""
+        width = self.robots["source" if learner.startswith("/source") else "target"].n_joints + 2
+        empty = np.zeros((0, width))
+        answer = self.call(InitialiseSensorimotor, f"{learner}/initialise", reset=True,
+                           seed=seed, elapsed=float(elapsed),
+                           own=to_matrix(empty if own is None else own),
+                           transferred=to_matrix(empty if transferred is None else transferred))
+        evaluations = [answer.evaluation] if own is not None else []
+        babbled = self.call(GoalBabble, f"{learner}/babble", seconds=float(seconds),
+                            evaluation_interval=self.interval)
+        evaluations += list(babbled.evaluations)
+        return ([e.learning_time for e in evaluations], [e.mean_error for e in evaluations],
+                [e.reaching_rate for e in evaluations], [e.n_transferred_samples
+                                                         for e in evaluations],
+                from_matrix(babbled.experience, "experience"))
+
+    def transferred(self, model_id, source_experience):
+        """ξ̂_t: the source's (q̄, x_s) through the model, padded with the target's home."""
+        n_source = self.robots["source"].n_joints
+        rows = np.hstack((source_experience[:, self.joints["source"]],
+                          source_experience[:, n_source:]))
+        mapped = from_matrix(self.call(TransferPoints, "/lpa_mapping/transfer",
+                                       model_id=model_id, source=to_matrix(rows)).target,
+                             "target")
+        return self.padded(mapped)
+
+    def padded(self, rows):
+        """Rows (q̄, x) of the target as (q, x): the joints outside q̄ at the target's home."""
+        n_shared = len(self.joints["target"])
+        return np.hstack((pad_transferred(rows[:, :n_shared], self.target_home,
+                                          self.joints["target"]), rows[:, n_shared:]))
+
+    def run(self, pair_files):
+        services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
+        services += ["/target/guarded_learner/babble"] if self.guarded else []
+        wait_for_services([self.calls.client(FitModel if s.endswith("fit") else GoalBabble, s)
+                           for s in services], 60, self.stop)
+        curves = {}
+        for seed, pair_file in zip(self.seeds, pair_files):
+            source_seed, target_seed, lpa_seed, after_transfer_seed = derived_seeds(seed)
+            *_, source_experience = self.learn("/source/learner", source_seed,
+                                               self.source_seconds)
+            self.get_logger().info(f"seed {seed}: the source babbled {len(source_experience)} "
+                                   f"samples")
+            self.record(curves, "scratch", self.learn("/target/learner", target_seed,
+                                                      self.total_seconds))
+            all_source_pairs, all_target_pairs = load_correspondences(pair_file)
+            for guided in self.guided_seconds:
+                n_pairs = int(round(guided * self.steps_per_second))
+                if n_pairs > len(all_source_pairs):
+                    raise ValueError(f"{pair_file} holds {len(all_source_pairs)} pairs, fewer "
+                                     f"than T_guided = {guided:g} s needs ({n_pairs})")
+                source_pairs, target_pairs = (all_source_pairs[:n_pairs],
+                                              all_target_pairs[:n_pairs])
+                for method in self.methods:
+                    model_id = f"seed{seed}/T{guided:g}/{method}"
+                    fields = dict(self.fit, random_state=lpa_seed) if method == "lpa" else {}
+                    self.call(FitModel, "/lpa_mapping/fit", model_id=model_id, method=method,
+                              latent_dim=self.fit["latent_dim"], source=to_matrix(source_pairs),
+                              target=to_matrix(target_pairs),
+                              **{k: v for k, v in fields.items() if k != "latent_dim"})
+                    transferred = self.transferred(model_id, source_experience)
+                    for guarded in (False, True) if self.guarded else (False,):
+                        learner = "/target/guarded_learner" if guarded else "/target/learner"
+                        name = f"{method.upper()}{'-guarded' if guarded else ''}/T{guided:g}"
+                        self.record(curves, name, self.learn(
+                            learner, after_transfer_seed, self.total_seconds - guided,
+                            own=self.padded(target_pairs), transferred=transferred,
+                            elapsed=guided))
+            self.seeds_done.append(seed)
+            write_outputs(curves, self, self.output_dir)
+        return curves
+
+    def record(self, curves, name, run):
+        times, errors, rates, n_transferred, _ = run
+        curves.setdefault(name, []).append(dict(times=times, mean_error=errors, rate=rates,
+                                                n_transferred=n_transferred))
+        self.get_logger().info(f"{name}: reaching rate " + " ".join(f"{r:.2f}" for r in rates)
+                               + f" (final mean error {1e3 * errors[-1]:.1f} mm)")
+
+
+# --------------------------------------------------------------------------- analysis
+def mean_curve(runs, key):
+    """(times, mean, std) over the runs of one condition (all share the times)."""
+    values = np.array([run[key] for run in runs], dtype=np.float64)
+    return np.asarray(runs[0]["times"]), values.mean(axis=0), values.std(axis=0)
+
+
+def report_lines(curves, experiment):
+    times, scratch_rate, _ = mean_curve(curves["scratch"], "rate")
+    lines = [f"Thesis §6.5.1 over the node graph: {len(experiment.seeds_done)} seed(s) "
+             f"({', '.join(map(str, experiment.seeds_done))}); target learns for "
+             f"{experiment.total_seconds:g} s ({experiment.steps_per_second:g} movements a "
+             f"simulated second), reaching threshold {1e3 * experiment.reaching_threshold:g} mm",
+             f"scratch reaches its final reaching rate {scratch_rate[-1]:.3f} first at "
+             f"{time_saved(times, scratch_rate, times, scratch_rate)[1]:g} s", "",
+             f"{'condition':<22} {'rate after transfer':>19} {'final rate':>11} "
+             f"{'final error (mm)':>16} {'reaches scratch final':>22} {'time saved':>10}"]
+    for name, runs in curves.items():
+        t, rate, rate_std = mean_curve(runs, "rate")
+        _, error, error_std = mean_curve(runs, "mean_error")
+        level, _, reach, saved = time_saved(times, scratch_rate, t, rate)
+        lines.append(f"{name:<22} {rate[0]:>19.3f} {rate[-1]:>5.3f} ± {rate_std[-1]:.3f} "
+                     f"{1e3 * error[-1]:>8.1f} ± {1e3 * error_std[-1]:4.1f} "
+                     f"{'never' if np.isinf(reach) else f'{reach:g} s':>22} "
+                     f"{'-' if name == 'scratch' or np.isinf(saved) else f'{saved:.0%}':>10}")
+    lines += ["", "'rate after transfer': the first evaluation (right after the transfer; for "
+              "scratch, after one interval)", THESIS]
+    return lines
+
+
+def write_outputs(curves, experiment, out):
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps({
+        "settings": {key: getattr(experiment, key) for key in SETTINGS},
+        "curves": curves}) + "\n")
+    with open(out / "learning_curves.csv", "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["condition", "seed", "learning_time_s", "mean_error_m",
+                         "reaching_rate", "n_transferred_active"])
+        for name, runs in curves.items():
+            for seed, run in zip(experiment.seeds_done, runs):
+                writer.writerows([name, seed, t, repr(e), repr(r), n] for t, e, r, n in zip(
+                    run["times"], run["mean_error"], run["rate"], run["n_transferred"]))
+    plot_curves(curves, experiment, out / "fig6_6_7_learning_curves.png")
+    plot_task_spaces(experiment, out / "fig6_5_task_spaces.png")
+    text = "\n".join(report_lines(curves, experiment)) + "\n"
+    (out / "report.txt").write_text(text)
+    return text
+
+
+def plot_curves(curves, experiment, path):
+    columns = [name for name in dict.fromkeys(n.split("/")[0] for n in curves)
+               if name != "scratch"]
+    fig, axes = plt.subplots(2, max(1, len(columns)), squeeze=False, sharex=True,
+                             figsize=(4.5 * max(1, len(columns)), 7), constrained_layout=True)
+    for col, method in enumerate(columns or ["scratch"]):
+        for row, (key, label, scale) in enumerate((("mean_error", "mean reaching error (mm)",
+                                                    1e3), ("rate", "reaching rate", 1))):
+            ax = axes[row, col]
+            for name in ["scratch"] + [n for n in curves if n.split("/")[0] == method]:
+                t, mean, std = mean_curve(curves[name], key)
+                style = dict(color="k", lw=2) if name == "scratch" else dict(lw=1.2)
+                line, = ax.plot(t, scale * mean, marker="o", ms=2.5, label=name.split("/")[-1]
+                                if name != "scratch" else "scratch", **style)
+                ax.fill_between(t, scale * (mean - std), scale * (mean + std),
+                                color=line.get_color(), alpha=0.15)
+            ax.set(ylabel=label, title=f"{method}" if row == 0 else None)
+            ax.grid(True, alpha=0.3)
+            if row == 1:
+                ax.set(xlabel="learning time (s of simulated babbling)", ylim=(0, 1.02))
+                ax.legend(title="T_guided", fontsize=8)
+    fig.suptitle(f"Thesis Fig. 6-6/6-7: target learning from scratch (black) and after "
+                 f"transfer; mean ± std over {len(experiment.seeds_done)} seed(s)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_task_spaces(experiment, path):
+    """Fig. 6-5: the two arms' reachable task spaces, X_bounds and the target's test points."""
+    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
+    rng = np.random.default_rng(0)
+    for side, colour in (("source", "tab:blue"), ("target", "tab:orange")):
+        robot = experiment.robots[side]
+        kinematics = robot_kinematics(robot)
+        reached = kinematics.forward(sample_joint_uniform(4000, kinematics.joint_limits, rng))
+        ax.scatter(reached[:, 0], reached[:, 1], s=1, color=colour, alpha=0.4,
+                   label=f"{side}: {robot.name}")
+    target = robot_kinematics(experiment.robots["target"], experiment.target_home)
+    points = evaluation_points(target, experiment.x_bounds, spacing=experiment.eval_spacing)
+    ax.scatter(points[:, 0], points[:, 1], s=8, marker="x", color="k",
+               label=f"target test points ({len(points)})")
+    (x0, y0), (x1, y1) = experiment.x_bounds
+    ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], "k--", lw=1, label="target X_bounds")
+    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal",
+           title="Thesis Fig. 6-5: task spaces of the two arms")
+    ax.legend(markerscale=4, fontsize=8, loc="lower left")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(args=None):
+    argv = sys.argv if args is None else args
+    pair_files = [a for a in argv[1:] if a.endswith(".npz")]
+    start = time.perf_counter()
+
+    def experiment(node):
+        if len(pair_files) != len(node.seeds):
+            raise ValueError(f"give one guided-exploration file per seed ({node.seeds}), got "
+                             f"{pair_files}")
+        return node.run(pair_files)
+
+    node, curves = run_job("experiment", Experiment, experiment,
+                           [a for a in argv if not a.endswith(".npz")])
+    text = write_outputs(curves, node, node.output_dir)
+    text += f"\nexperiment wall time {time.perf_counter() - start:.0f} s\n"
+    (node.output_dir / "report.txt").write_text(text)
+    print(text, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
