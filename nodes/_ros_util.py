@@ -151,7 +151,10 @@ def wait_for_services(clients, timeout, stop):
     deadline = time.monotonic() + timeout
     for client in clients:
         while not client.wait_for_service(timeout_sec=0.2):
-            if stop.is_set() or time.monotonic() > deadline:
+            if stop.is_set():
+                raise ServiceTimeout(f"stopped (SIGINT/SIGTERM) while waiting for "
+                                     f"{client.srv_name}")
+            if time.monotonic() > deadline:
                 raise ServiceTimeout(f"service {client.srv_name} is not available after "
                                      f"{timeout:g} s (is its node running, in this ROS domain?)")
 
