@@ -73,11 +73,8 @@ def test_refuses_to_clear_a_foreign_directory(tmp_path):
 def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
     """SIGINT to the script's process group (what Ctrl-C in a terminal sends) mid-collection."""
     out = tmp_path / "run"
-    longer = tmp_path / "longer.yaml"   # 4000 pairs: still collecting when the SIGINT comes,
-    longer.write_text("correspondence_collector:\n  ros__parameters:\n    n_segments: 800\n")
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))   # even on a loaded machine
-    script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--override", str(longer),
-                               "--out", str(out)], env=env,
+    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
+    script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                               start_new_session=True)
     collector_log = out / "logs" / "correspondence_collector.log"
@@ -90,5 +87,5 @@ def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
     topics = summary(out / "run.mcap")            # a finalised file: its summary is readable
     with np.load(out / "correspondences.npz") as pairs:
         assert not bool(pairs["complete"])
-        assert 0 < len(pairs["source"]) < 4000
+        assert 0 < len(pairs["source"]) < 400
         assert topics["/correspondences"].message_count == len(pairs["source"])
