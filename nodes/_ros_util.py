@@ -21,7 +21,7 @@ from lpa_transfer.bag import split_type_name
 from lpa_transfer.model_store import matrix_from_rows
 from lpa_transfer.simulator import SimState
 from lpa_transfer_interfaces.msg import Matrix
-from lpa_transfer_interfaces.srv import StepRobot
+from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 
 
 #: Correspondence topics: every sample must arrive (reliable, deep queue); the batch is
@@ -198,6 +198,36 @@ def robot_stepper(call, client, name):
             raise RuntimeError(f"the {name} robot refused a step: {response.message}")
         return sim_state(response)
     return step
+
+
+def robot_resetter(call, client, name):
+    """``reset(positions) -> SimState`` over a robot_sim's ResetRobot service: the robot at rest
+    at ``positions``; a refused reset raises RuntimeError with the simulator's message."""
+    def reset(positions):
+        response = call(client, ResetRobot.Request(positions=[float(q) for q in positions]))
+        if not response.success:
+            raise RuntimeError(f"the {name} robot refused a reset: {response.message}")
+        return sim_state(response)
+    return reset
+
+
+class RobotClients:
+    """A robot_sim's StepRobot and ResetRobot clients for calls made inside a node's service
+    callbacks: on a client node of their own (``<node>_robot_client``, no command-line
+    remaps, which would rename it), spun by their own ``executor``, so that a callback never
+    re-enters its node's executor. ``destroy()`` with the node."""
+
+    def __init__(self, node, step_service, reset_service):
+        self.node = rclpy.create_node(f"{node.get_name()}_robot_client",
+                                      namespace=node.get_namespace(), use_global_arguments=False)
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
+        self.step = self.node.create_client(StepRobot, step_service)
+        self.reset = self.node.create_client(ResetRobot, reset_service)
+
+    def destroy(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
 
 
 def sim_state(response):

@@ -100,8 +100,8 @@ from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
-                                          robot_stepper, run_job, sim_stamp, to_matrix,
-                                          wait_for_services, wait_for_subscribers)
+                                          robot_resetter, robot_stepper, run_job, sim_stamp,
+                                          to_matrix, wait_for_services, wait_for_subscribers)
 
 FIT_FIELDS = {"method": "lpa", "latent_dim": 0, "n_min": 0, "c_min": 0.0, "k_max": 0,
               "n_init": 0}
@@ -288,10 +288,7 @@ class CorrespondenceCollector(Node):
             f"{self.joints['target']}), then {self.robots['source'].name} (joints "
             f"{self.joints['source']}): same_command, seed {babbling.seed}")
         for side, client in self.reset_clients.items():   # same seed, same start, same pairs
-            answer = self.call(client, ResetRobot.Request(
-                positions=[float(q) for q in self.kinematics[side].home]))
-            if not answer.success:
-                raise RuntimeError(f"the {side} robot refused a reset: {answer.message}")
+            robot_resetter(self.call, client, side)(self.kinematics[side].home)
         environments = {side: stepped_environment(self.kinematics[side], self.stepper(side),
                                                   self.steps_per_sample)
                         for side in self.robots}

@@ -57,8 +57,9 @@ Services:
 
 * ``~/initialise`` (InitialiseSensorimotor): with ``reset``, first put the robot at rest at
   q_home, and start afresh (a new model, the clock at 0, babbling restarts at the next
-  ``babble``, seeded by the request's ``seed``, or by the parameter if it is -1). Then learn the ``own`` rows (q, x) with weight 1, then the ``transferred`` rows
-  (guarded: as transferred samples; unguarded: like own data), advance the clock by
+  ``babble``, seeded by the request's ``seed``, or by the parameter if it is -1). Then learn
+  the ``own`` rows (q, x) with weight 1, then the ``transferred`` rows (guarded: as
+  transferred samples; unguarded: like own data), advance the clock by
   ``elapsed``, and answer (and publish) an evaluation. Rows need n_joints + task-dimension
   columns; rows with NaN/inf are rejected and counted, never learned. A model without any
   sample is evaluated as ``mean_error`` NaN, ``reaching_rate`` 0.
@@ -82,8 +83,6 @@ import math
 import os
 
 import numpy as np
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -96,11 +95,11 @@ from lpa_transfer.robot_environment import stepped_environment, task_dims
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
-from lpa_transfer_interfaces.srv import (GoalBabble, InitialiseSensorimotor, ResetRobot,
-                                         StepRobot)
-from lpa_transfer_nodes._ros_util import (ServiceTimeout, answering, array_parameter,
-                                          call_service, from_matrix, robot_stepper, serve,
-                                          sim_stamp, sim_state, to_matrix, wait_for_services)
+from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
+from lpa_transfer_nodes._ros_util import (RobotClients, ServiceTimeout, answering,
+                                          array_parameter, call_service, from_matrix,
+                                          robot_resetter, robot_stepper, serve, sim_stamp,
+                                          to_matrix, wait_for_services)
 
 #: Every evaluation should reach its subscribers, even many in one babble call.
 EVALUATION_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -150,19 +149,10 @@ class GoalBabblingLearner(Node):
             raise ValueError(f"no test points: no point of the grid of {eval_spacing:g} m over "
                              f"the box {np.round(eval_bounds, 6).tolist()} is reachable (check "
                              f"eval_low/eval_high, x_low/x_high and eval_spacing)")
-        # Robot calls happen inside service callbacks: a client node of their own, spun by
-        # its own executor, so the callback never re-enters this node's executor.
-        self.robot_node = rclpy.create_node(  # no command-line remaps (__node would rename it)
-            f"{self.get_name()}_robot_client", namespace=self.get_namespace(),
-            use_global_arguments=False)
-        self.robot_spinner = SingleThreadedExecutor()
-        self.robot_spinner.add_node(self.robot_node)
-        self.step_client = self.robot_node.create_client(
-            StepRobot, declare("step_service", "robot_sim/step"))
-        self.reset_client = self.robot_node.create_client(
-            ResetRobot, declare("reset_service", "robot_sim/reset"))
+        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
+                                          declare("reset_service", "robot_sim/reset"))
         self.environment = stepped_environment(
-            self.kinematics, robot_stepper(self.call, self.step_client, self.robot.name),
+            self.kinematics, robot_stepper(self.call, self.robot_clients.step, self.robot.name),
             self.steps_per_sample, on_sample=self.on_sample)
         self.sim_time = 0.0
         self.start_afresh()
@@ -246,7 +236,7 @@ class GoalBabblingLearner(Node):
     # -- robot -----------------------------------------------------------------------------------
     def call(self, client, request):
         try:
-            return call_service(self.robot_spinner, client, request, self.call_timeout,
+            return call_service(self.robot_clients.executor, client, request, self.call_timeout,
                                 self.stop)
         except ServiceTimeout:
             if self.stop.is_set():
@@ -259,8 +249,8 @@ class GoalBabblingLearner(Node):
 
     def wait_for_robot(self):
         try:
-            wait_for_services([self.step_client, self.reset_client], self.wait_timeout,
-                              self.stop)
+            wait_for_services([self.robot_clients.step, self.robot_clients.reset],
+                              self.wait_timeout, self.stop)
         except ServiceTimeout:
             if not self.stop.is_set():
                 raise
@@ -269,11 +259,8 @@ class GoalBabblingLearner(Node):
 
     def reset_robot(self):
         """Put the robot at rest at q_home."""
-        answer = self.call(self.reset_client, ResetRobot.Request(
-            positions=[float(q) for q in self.kinematics.home]))
-        if not answer.success:
-            raise RuntimeError(f"the robot refused a reset: {answer.message}")
-        self.sim_time = sim_state(answer).time
+        reset = robot_resetter(self.call, self.robot_clients.reset, self.robot.name)
+        self.sim_time = reset(self.kinematics.home).time
 
     # -- services --------------------------------------------------------------------------------
     @property
@@ -400,8 +387,7 @@ class GoalBabblingLearner(Node):
                 f"{evaluation.n_transferred_samples} transferred samples)")
 
     def destroy_node(self):
-        self.robot_spinner.shutdown()
-        self.robot_node.destroy_node()
+        self.robot_clients.destroy()
         super().destroy_node()
 
 

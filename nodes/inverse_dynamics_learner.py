@@ -37,8 +37,6 @@ import json
 import os
 
 import numpy as np
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -48,9 +46,10 @@ from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_r
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.tasks import joint_trajectory, star_trajectory
 from lpa_transfer_interfaces.msg import TrialResult
-from lpa_transfer_interfaces.srv import InitialiseLearner, ResetRobot, RunTrials, StepRobot
-from lpa_transfer_nodes._ros_util import (answering, array_parameter, call_service, from_matrix,
-                                          robot_stepper, serve, sim_stamp, sim_state, to_matrix,
+from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
+from lpa_transfer_nodes._ros_util import (RobotClients, answering, array_parameter,
+                                          call_service, from_matrix, robot_resetter,
+                                          robot_stepper, serve, sim_stamp, to_matrix,
                                           wait_for_services)
 
 
@@ -77,18 +76,11 @@ class InverseDynamicsLearner(Node):
         self.learner = self.fresh_learner(pid)
         self.call_timeout = float(declare("call_timeout", 30.0))
         self.wait_timeout = float(declare("wait_timeout", 30.0))
-        # Robot calls happen inside service callbacks: a client node of their own, spun by
-        # its own executor, so the callback never re-enters this node's executor.
-        self.robot_node = rclpy.create_node(  # no command-line remaps (__node would rename it)
-            f"{self.get_name()}_robot_client", namespace=self.get_namespace(),
-            use_global_arguments=False)
-        self.robot_spinner = SingleThreadedExecutor()
-        self.robot_spinner.add_node(self.robot_node)
-        self.step_client = self.robot_node.create_client(
-            StepRobot, declare("step_service", "robot_sim/step"))
-        self.reset_client = self.robot_node.create_client(
-            ResetRobot, declare("reset_service", "robot_sim/reset"))
-        self.step = robot_stepper(self.call, self.step_client, self.robot.name)
+        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
+                                          declare("reset_service", "robot_sim/reset"))
+        self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
+        self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
+                                             self.robot.name)
         self.trial = 0
         self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
         self.create_service(InitialiseLearner, "~/initialise",
@@ -126,7 +118,7 @@ class InverseDynamicsLearner(Node):
         return FeedForwardLearner(make_regressor(name, **hyperparameters), pid)
 
     def call(self, client, request):
-        return call_service(self.robot_spinner, client, request, self.call_timeout)
+        return call_service(self.robot_clients.executor, client, request, self.call_timeout)
 
     def initialise(self, request, response):
         samples = from_matrix(request.samples, "samples")
@@ -142,7 +134,8 @@ class InverseDynamicsLearner(Node):
         return f"learned {response.n_learned} samples, rejected {response.n_rejected}"
 
     def run_trials(self, request, response):
-        wait_for_services([self.step_client, self.reset_client], self.wait_timeout, self.stop)
+        wait_for_services([self.robot_clients.step, self.robot_clients.reset], self.wait_timeout,
+                          self.stop)
         state = self.reset_robot()
         self.learner.learn = not request.frozen
         errors, experience = [], []
@@ -166,11 +159,7 @@ class InverseDynamicsLearner(Node):
 
     def reset_robot(self):
         """Put the robot at rest at the star's centre pose; its state."""
-        answer = self.call(self.reset_client, ResetRobot.Request(
-            positions=[float(q) for q in self.centre_pose]))
-        if not answer.success:
-            raise RuntimeError(f"the robot refused a reset: {answer.message}")
-        return sim_state(answer)
+        return self.reset_robot_to(self.centre_pose)
 
     def publish(self, trial, n_learned, n_rejected):
         msg = TrialResult(robot=self.robot.name, task=self.get_name(), trial=self.trial,
@@ -183,8 +172,7 @@ class InverseDynamicsLearner(Node):
                                f"{1e3 * trial.tracking_error:.2f} mm")
 
     def destroy_node(self):
-        self.robot_spinner.shutdown()
-        self.robot_node.destroy_node()
+        self.robot_clients.destroy()
         super().destroy_node()
 
 
