@@ -150,6 +150,42 @@ class ClientNode:
         self._rclpy.try_shutdown(context=self.context)
 
 
+class PairListener(ClientNode):
+    """Collects the CorrespondenceSample messages on ``/correspondences`` in the test
+    process."""
+
+    def __init__(self, domain_id):
+        from lpa_transfer_interfaces.msg import CorrespondenceSample
+        from lpa_transfer_nodes._ros_util import SAMPLE_QOS
+
+        super().__init__(domain_id, "pair_listener")
+        self.samples = []
+        self.node.create_subscription(CorrespondenceSample, "/correspondences",
+                                      self.samples.append, SAMPLE_QOS)
+
+    def matrices(self):
+        """(source, target) arrays of the samples in index order."""
+        import numpy as np
+
+        ordered = sorted(self.samples, key=lambda msg: msg.index)
+        return (np.array([msg.source for msg in ordered]),
+                np.array([msg.target for msg in ordered]))
+
+
+def start_robot_sims(domain_id, log_dir, robots, **params):
+    """A robot_sim process per side of ``robots`` ({side: robot file}), in namespace
+    ``/<side>``, with ``params`` (e.g. initial_positions)."""
+    return [NodeProcess("robot_sim", domain_id, log_dir, name=f"{side}_sim",
+                        args=ros_params(robot=robot, **params) + ["-r", f"__ns:=/{side}"])
+            for side, robot in robots.items()]
+
+
+def run_to_end(process, timeout=60):
+    """Wait for a node with one job to exit; its exit code (after ``stop()``)."""
+    process.process.wait(timeout)
+    return process.stop()
+
+
 def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=()):
     """Run ``<scenario_dir>/run.sh --config <config> [--override <file>]... --out <out>`` on
     its own ROS domain (files relative to the scenario); the CompletedProcess (text output

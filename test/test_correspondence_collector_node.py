@@ -19,12 +19,11 @@ from lpa_transfer.correspondences import collect_correspondences
 from lpa_transfer.model_store import ModelStore
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
+from ros_harness import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
+                         unique_domain_id, wait_until)
 
 rclpy = pytest.importorskip("rclpy")
-from lpa_transfer_interfaces.msg import CorrespondenceSample  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, ListModels  # noqa: E402
-from lpa_transfer_nodes._ros_util import SAMPLE_QOS  # noqa: E402
 
 ROBOTS = {side: ROOT / "scenarios" / "robots" / f"two_link_{side}.toml"
           for side in ("source", "target")}
@@ -54,30 +53,8 @@ def library_pairs():
             sim.close()
 
 
-class PairListener(ClientNode):
-    """Collects CorrespondenceSample messages in the test process."""
-
-    def __init__(self, domain_id):
-        super().__init__(domain_id, "pair_listener")
-        self.samples = []
-        self.node.create_subscription(CorrespondenceSample, "/correspondences",
-                                      self.samples.append, SAMPLE_QOS)
-
-    def matrices(self):
-        ordered = sorted(self.samples, key=lambda msg: msg.index)
-        return (np.array([msg.source for msg in ordered]),
-                np.array([msg.target for msg in ordered]))
-
-
 def start_sims(domain_id, log_dir):
-    return [NodeProcess("robot_sim", domain_id, log_dir, name=f"{side}_sim",
-                        args=ros_params(robot=ROBOTS[side]) + ["-r", f"__ns:=/{side}"])
-            for side in ("source", "target")]
-
-
-def run_to_end(process, timeout=60):
-    process.process.wait(timeout)
-    return process.stop()
+    return start_robot_sims(domain_id, log_dir, ROBOTS)
 
 
 @pytest.fixture(scope="module")
@@ -208,9 +185,7 @@ def test_torque_mode_pid_tracking_of_task_lines_equals_the_library(tmp_path):
     program = BabblingProgram("task_lines", 3, 20, seed=5)
     features = ["position", "velocity", "acceleration", "effort"]
     domain_id = unique_domain_id()
-    sims = [NodeProcess("robot_sim", domain_id, tmp_path, name=f"{side}_sim",
-                        args=ros_params(robot=ROBOTS[side], control_mode="torque")
-                        + ["-r", f"__ns:=/{side}"]) for side in ("source", "target")]
+    sims = start_robot_sims(domain_id, tmp_path, ROBOTS, control_mode="torque")
     try:
         params = dict(source_robot=ROBOTS["source"], target_robot=ROBOTS["target"],
                       pairing_rule="same_time_index", program="task_lines", n_segments=3,

@@ -20,11 +20,10 @@ from lpa_transfer.model_store import ModelStore
 from lpa_transfer.robot_environment import stepped_environment
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
+from ros_harness import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
+                         unique_domain_id, wait_until)
 
 rclpy = pytest.importorskip("rclpy")
-from lpa_transfer_interfaces.msg import CorrespondenceSample  # noqa: E402
-from lpa_transfer_nodes._ros_util import SAMPLE_QOS  # noqa: E402
 
 ROBOTS = {side: ROOT / "scenarios" / "robots" / f"goal_babbling_{side}.toml"
           for side in ("source", "target")}
@@ -61,26 +60,8 @@ def library_pairs():
             sim.close()
 
 
-class PairListener(ClientNode):
-    """Collects CorrespondenceSample messages in the test process."""
-
-    def __init__(self, domain_id):
-        super().__init__(domain_id, "pair_listener")
-        self.samples = []
-        self.node.create_subscription(CorrespondenceSample, "/correspondences",
-                                      self.samples.append, SAMPLE_QOS)
-
-
 def start_sims(domain_id, log_dir):
-    return [NodeProcess("robot_sim", domain_id, log_dir, name=f"{side}_sim",
-                        args=ros_params(robot=ROBOTS[side], initial_positions=str(HOME))
-                        + ["-r", f"__ns:=/{side}"])
-            for side in ("source", "target")]
-
-
-def run_to_end(process, timeout=60):
-    process.process.wait(timeout)
-    return process.stop()
+    return start_robot_sims(domain_id, log_dir, ROBOTS, initial_positions=str(HOME))
 
 
 @pytest.fixture(scope="module")
