@@ -30,12 +30,18 @@ def transfer_experience(mapping, source_experience, target_home, shared_joints):
     """
     shared_joints = check_joints(shared_joints, len(np.atleast_1d(target_home)))
     mapped = mapping.transfer(check.as_matrix(source_experience, "source_experience"))
-    n_shared = len(shared_joints)
-    if mapped.shape[1] <= n_shared:
+    if mapped.shape[1] <= len(shared_joints):
         raise ValueError(f"the mapping yields {mapped.shape[1]} columns, too few for "
-                         f"{n_shared} shared joints and a task point")
-    return pad_transferred(mapped[:, :n_shared], target_home, shared_joints), \
-        mapped[:, n_shared:]
+                         f"{len(shared_joints)} shared joints and a task point")
+    return padded_rows(mapped, target_home, shared_joints)
+
+
+def padded_rows(rows, target_home, shared_joints):
+    """Rows (q̄, x) of the target's domain (e.g. mapped ones, or its guided-exploration
+    pairs) as ``(commands (N, d_t), points (N, m))``: q̄ padded with ``target_home`` in the
+    joints not in ``shared_joints`` (§6.4.1)."""
+    n_shared = len(shared_joints)
+    return pad_transferred(rows[:, :n_shared], target_home, shared_joints), rows[:, n_shared:]
 
 
 def initialise_with_transfer(model, commands, points):

@@ -44,11 +44,11 @@ from rclpy.node import Node  # noqa: E402
 from lpa_transfer.babbling import robot_kinematics  # noqa: E402
 from lpa_transfer.correspondences import load_correspondences  # noqa: E402
 from lpa_transfer.goal_babbling_experiment import derived_seeds  # noqa: E402
-from lpa_transfer.guided_exploration import pad_transferred  # noqa: E402
 from lpa_transfer.kinematics import sample_joint_uniform  # noqa: E402
 from lpa_transfer.learning_curves import time_saved  # noqa: E402
 from lpa_transfer.reaching import evaluation_points  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer.transfer_babbling import padded_rows  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, GoalBabble,  # noqa: E402
                                          InitialiseSensorimotor, TransferPoints)
 from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
@@ -125,9 +125,7 @@ class Experiment(Node):
 
     def padded(self, rows):
         """Rows (q̄, x) of the target as (q, x): the joints outside q̄ at the target's home."""
-        n_shared = len(self.joints["target"])
-        return np.hstack((pad_transferred(rows[:, :n_shared], self.target_home,
-                                          self.joints["target"]), rows[:, n_shared:]))
+        return np.hstack(padded_rows(rows, self.target_home, self.joints["target"]))
 
     def run(self, pair_files):
         services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
