@@ -70,13 +70,20 @@ def test_refuses_to_clear_a_foreign_directory(tmp_path):
     assert (tmp_path / "precious.txt").read_text() == "keep me"
 
 
+def _default_sigint():
+    """A shell started with SIGINT ignored (e.g. pytest as a background job of a
+    non-interactive shell) cannot trap it; give the script the default disposition, as a
+    terminal would."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
     """SIGINT to the script's process group (what Ctrl-C in a terminal sends) mid-collection."""
     out = tmp_path / "run"
     env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
     script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                              start_new_session=True)
+                              start_new_session=True, preexec_fn=_default_sigint)
     collector_log = out / "logs" / "correspondence_collector.log"
     wait_until(lambda: collector_log.exists() and "babbling" in collector_log.read_text(),
                timeout=60, what="the collection to start")
