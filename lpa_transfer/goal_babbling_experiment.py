@@ -15,7 +15,7 @@ from .goal_babbling import GoalBabbling
 from .guided_exploration import guided_exploration
 from .kinematics import planar_forward_kinematics, sample_joint_uniform
 from .local_procrustes import LocalProcrustesAnalysis
-from .negative_transfer import GuardedModel, planar_lipschitz
+from .negative_transfer import GuardedModel, chain_lipschitz
 from .procrustes import ProcrustesAnalysis
 from .reaching import evaluate_reaching, evaluation_points
 from .sensorimotor import make_sensorimotor_model
@@ -39,7 +39,7 @@ class Experiment1:
     2-link value); the thesis' c_min 0.001 yields one cluster here (c_k of eq. 3.15 shrinks
     like 1/sqrt(N_k): 600 pairs with 2 cm RMS error give c_k ≈ 8e-4), so c_min is 1e-7 and
     N_min sets the number of clusters (§3.5). The guard's L defaults to
-    :func:`planar_lipschitz` of the target. The task boxes are the arms' workspaces' bounding
+    :func:`chain_lipschitz` of the target. The task boxes are the arms' workspaces' bounding
     boxes, rounded out to 0.1 m.
     """
 
@@ -151,7 +151,7 @@ def run_condition(condition, seed, config=Experiment1()):
     babbler = _babbler(config, target, seeds[1])
     model = make_sensorimotor_model(forward=False)
     if condition.endswith("-guarded"):
-        guard = {"lipschitz": planar_lipschitz(config.target_links), **dict(config.guard)}
+        guard = {"lipschitz": chain_lipschitz(config.target_links), **dict(config.guard)}
         model = GuardedModel(model, **guard)
     results, transferred = {}, [0]
 

@@ -146,7 +146,7 @@ class GuardedModel:
         0.001-0.005 m, but with the true error, which a robot does not know).
     lipschitz : float, default 1.5 m/rad
         L, an upper bound of ‖∂x/∂q‖₂ of the target (too small a value retires correct
-        samples). A planar chain's is at most :func:`planar_lipschitz` (1.17 for the
+        samples). A chain's is at most :func:`chain_lipschitz` (1.17 for the
         Table 6.1 target); 1.5 covers planar arms up to ~1.3 m long.
     n_checked : int, default 3
         Transferred samples tested against each executed command.
@@ -263,9 +263,12 @@ class GuardedModel:
             index.stale += len(rows)
 
 
-def planar_lipschitz(link_lengths):
-    """An upper bound of ‖∂x/∂q‖₂ of a planar chain: sqrt(Σ_i (Σ_{j≥i} l_j)²) (the
-    Frobenius norm bound; column i of the Jacobian is at most the reach beyond joint i)."""
+def chain_lipschitz(link_lengths):
+    """An upper bound of ‖∂x/∂q‖₂ of a chain of revolute joints: sqrt(Σ_i (Σ_{j≥i} l_j)²)
+    (the Frobenius norm bound). Column i of the position Jacobian is a_i × (x − p_i), at most
+    the distance from joint i to the end effector, at most the reach beyond joint i; l_j are
+    the distances between successive joint origins and the tool — a planar chain's link
+    lengths, a serial chain's ``RobotParams.link_lengths``."""
     reach = np.cumsum(np.asarray(link_lengths, dtype=np.float64)[::-1])
     return float(np.sqrt((reach ** 2).sum()))
 

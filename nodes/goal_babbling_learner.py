@@ -43,8 +43,8 @@ Parameters:
   thesis does); ``guard_params`` (JSON object string, ``'{}'``): GuardedModel's
   hyperparameters (``transferred_weight``, ``coverage_radius``, ``coverage_count``,
   ``disagreement_threshold``, ``lipschitz``, ``n_checked``). ``lipschitz`` defaults to
-  :func:`~lpa_transfer.negative_transfer.planar_lipschitz` of a planar robot's links; for
-  other robots it is required when ``guard`` is true.
+  :func:`~lpa_transfer.negative_transfer.chain_lipschitz` of the robot's links (planar or
+  serial).
 * ``eval_low``, ``eval_high`` (double arrays, default X_bounds): the box of the test points;
   ``eval_spacing`` (m, 0.05): their grid spacing (:func:`lpa_transfer.reaching.
   evaluation_points`; computed once at start-up, the node does not start without any);
@@ -89,7 +89,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
-from lpa_transfer.negative_transfer import GuardedModel, planar_lipschitz
+from lpa_transfer.negative_transfer import GuardedModel, chain_lipschitz
 from lpa_transfer.reaching import evaluate_reaching, evaluation_points
 from lpa_transfer.robot_environment import stepped_environment, task_dims
 from lpa_transfer.robot_params import load_robot_params
@@ -183,12 +183,7 @@ class GoalBabblingLearner(Node):
             if params:
                 self.get_logger().warning("guard_params are ignored: guard is false")
             return None
-        if "lipschitz" not in params:
-            if self.robot.kind != "planar":
-                raise ValueError(f"guard_params needs 'lipschitz' (an upper bound of the "
-                                 f"Jacobian's norm, m/rad) for the {self.robot.kind} robot "
-                                 f"{self.robot.name}")
-            params["lipschitz"] = planar_lipschitz(self.robot.link_lengths)
+        params.setdefault("lipschitz", chain_lipschitz(self.robot.link_lengths))
         return params
 
     def check_hyperparameters(self, physics_step):

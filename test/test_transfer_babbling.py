@@ -6,7 +6,7 @@ import pytest
 from lpa_transfer.procrustes import ProcrustesAnalysis
 from lpa_transfer.sensorimotor import make_sensorimotor_model
 from lpa_transfer.goal_babbling_experiment import Experiment1, run_condition
-from lpa_transfer.negative_transfer import COVERED, DISAGREED, GuardedModel, planar_lipschitz
+from lpa_transfer.negative_transfer import COVERED, DISAGREED, GuardedModel, chain_lipschitz
 from lpa_transfer.transfer_babbling import initialise_with_transfer, transfer_experience
 from two_link import GB_TARGET_LINKS
 
@@ -109,7 +109,7 @@ def test_own_data_contradicting_a_sample_retire_it_at_transfer():
 
 def test_the_lipschitz_bound_of_a_planar_arm_holds_for_the_target():
     links, rng = GB_TARGET_LINKS, np.random.default_rng(0)
-    bound = planar_lipschitz(links)
+    bound = chain_lipschitz(links)
     assert bound == pytest.approx(np.hypot(1.1, 0.4))
     from lpa_transfer.kinematics import planar_forward_kinematics
     q = rng.uniform(-3, 3, (500, 2))
@@ -118,6 +118,21 @@ def test_the_lipschitz_bound_of_a_planar_arm_holds_for_the_target():
                            - planar_forward_kinematics(q, links), axis=1) \
         / np.linalg.norm(step, axis=1)
     assert ratio.max() <= bound and ratio.max() > 0.8 * bound
+
+
+def test_the_lipschitz_bound_holds_for_a_serial_chain():
+    """The youBot (5 joints, offsets in 3-D): finite-difference slopes of its forward
+    kinematics stay below chain_lipschitz of its link offsets."""
+    from conftest import ROOT
+    from lpa_transfer.robot_params import load_robot_params
+    from lpa_transfer.serial_chain import forward_kinematics
+    robot = load_robot_params(ROOT / "scenarios" / "robots" / "youbot_arm.toml")
+    bound, rng = chain_lipschitz(robot.link_lengths), np.random.default_rng(1)
+    q = rng.uniform(robot.joint_limits[:, 0], robot.joint_limits[:, 1], (2000, 5))
+    step = rng.normal(0, 1e-5, (2000, 5))
+    ratio = np.linalg.norm(forward_kinematics(robot, q + step) - forward_kinematics(robot, q),
+                           axis=1) / np.linalg.norm(step, axis=1)
+    assert ratio.max() <= bound and ratio.max() > 0.5 * bound
 
 
 # -- experiment 1 runner (§6.5.1) ---------------------------------------------------------------
