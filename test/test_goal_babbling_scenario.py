@@ -63,3 +63,24 @@ def test_guided_exploration_pairs_and_the_bag(smoke_run):
         assert (smoke_run / name).stat().st_size > 0, name
     assert "time saved" in (smoke_run / "report.txt").read_text()
     assert len(list((smoke_run / "models").iterdir())) == 2    # PA and LPA of seed 0
+
+
+def test_merge_results_joins_shares_and_refuses_a_repeated_seed(smoke_run, tmp_path):
+    """merge_results.py rebuilds one run's outputs from its CSV and settings; the same seed
+    given twice is refused."""
+    import subprocess
+    import sys
+    script = SCENARIO / "merge_results.py"
+    merged = tmp_path / "merged"
+    done = subprocess.run([sys.executable, str(script), str(merged), str(smoke_run)],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    original = json.loads((smoke_run / "results.json").read_text())
+    again = json.loads((merged / "results.json").read_text())
+    assert again["settings"] == original["settings"]
+    assert again["curves"] == original["curves"]
+    assert (merged / "report.txt").read_text().splitlines()[:4] == \
+        (smoke_run / "report.txt").read_text().splitlines()[:4]
+    twice = subprocess.run([sys.executable, str(script), str(tmp_path / "twice"), str(smoke_run),
+                            str(smoke_run)], capture_output=True, text=True, cwd=ROOT)
+    assert twice.returncode != 0 and "more than one run" in twice.stderr

@@ -17,7 +17,9 @@ For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling_experiment
 2. ``scratch``: the target goal-babbles for ``total_seconds``, evaluated every ``interval`` s.
 3. For every T_guided and method (PA, LPA): the mapping service fits the method on the first
    T_guided s of guided-exploration pairs (q̄, x_s) -> (q̄, x_t); ξ_s is transferred through it
-   and padded with the target's home for joints the source lacks (§6.4.1); the target learner
+   (with ``transfer_from_guided``, only the part the source babbled after T_guided, as
+   §6.5.2 transfers Nao's data from 600 s to 5000 s) and padded with the target's home for
+   joints the source lacks (§6.4.1); the target learner
    is reset and initialised with its own guided samples and the transferred ones, its clock at
    T_guided, and goal-babbles for the rest of ``total_seconds`` (with a seed of its own: the
    learner restarts its babbler, and the guided exploration's goals should not repeat). With ``guarded``, the same
@@ -55,7 +57,8 @@ from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  #
                                           to_matrix, wait_for_services)
 
 SETTINGS = ("seeds_done", "source_seconds", "total_seconds", "guided_seconds", "interval",
-            "methods", "guarded", "reaching_threshold")
+            "methods", "guarded", "reaching_threshold", "transfer_from_guided", "robot_files",
+            "target_home", "x_bounds", "eval_spacing", "steps_per_second", "thesis")
 THESIS = ("thesis §6.5.1 (Fig. 6-6/6-7, read from the text): transfer boosts learning at "
           "once; LPA helps the final performance when applied at 180 s and beyond, and "
           "transfers negatively from 60 s of guided exploration; PA transfers negatively")
@@ -80,9 +83,11 @@ class Experiment(Node):
         self.methods = list(declare("methods", ["pa", "lpa"]))
         self.guarded = bool(declare("guarded", True))
         self.reaching_threshold = float(declare("reaching_threshold", 0.01))
+        self.transfer_from_guided = bool(declare("transfer_from_guided", False))
+        self.thesis = declare("thesis", THESIS)
         self.fit = dict(latent_dim=declare("latent_dim", 0), n_min=declare("n_min", 7),
                         c_min=declare("c_min", 1e-7))
-        self.x_bounds = (declare("x_low", [0.0]), declare("x_high", [0.0]))
+        self.x_bounds = (list(declare("x_low", [0.0])), list(declare("x_high", [0.0])))
         self.eval_spacing = float(declare("eval_spacing", 0.05))
         self.output_dir = Path(declare("output_dir", "."))
         if not 0 < max(self.guided_seconds) <= self.total_seconds:
@@ -149,6 +154,7 @@ class Experiment(Node):
                                      f"than T_guided = {guided:g} s needs ({n_pairs})")
                 source_pairs, target_pairs = (all_source_pairs[:n_pairs],
                                               all_target_pairs[:n_pairs])
+                experience = source_experience[n_pairs if self.transfer_from_guided else 0:]
                 for method in self.methods:
                     model_id = f"seed{seed}/T{guided:g}/{method}"
                     fields = dict(self.fit, random_state=lpa_seed) if method == "lpa" else {}
@@ -156,7 +162,7 @@ class Experiment(Node):
                               latent_dim=self.fit["latent_dim"], source=to_matrix(source_pairs),
                               target=to_matrix(target_pairs),
                               **{k: v for k, v in fields.items() if k != "latent_dim"})
-                    transferred = self.transferred(model_id, source_experience)
+                    transferred = self.transferred(model_id, experience)
                     for guarded in (False, True) if self.guarded else (False,):
                         learner = "/target/guarded_learner" if guarded else "/target/learner"
                         name = f"{method.upper()}{'-guarded' if guarded else ''}/T{guided:g}"
@@ -185,7 +191,8 @@ def mean_curve(runs, key):
 
 def report_lines(curves, experiment):
     times, scratch_rate, _ = mean_curve(curves["scratch"], "rate")
-    lines = [f"Thesis §6.5.1 over the node graph: {len(experiment.seeds_done)} seed(s) "
+    lines = [f"Thesis ch. 6 over the node graph ({experiment.robots['source'].name} -> "
+             f"{experiment.robots['target'].name}): {len(experiment.seeds_done)} seed(s) "
              f"({', '.join(map(str, experiment.seeds_done))}); target learns for "
              f"{experiment.total_seconds:g} s ({experiment.steps_per_second:g} movements a "
              f"simulated second), reaching threshold {1e3 * experiment.reaching_threshold:g} mm",
@@ -202,7 +209,7 @@ def report_lines(curves, experiment):
                      f"{'never' if np.isinf(reach) else f'{reach:g} s':>22} "
                      f"{'-' if name == 'scratch' or np.isinf(saved) else f'{saved:.0%}':>10}")
     lines += ["", "'rate after transfer': the first evaluation (right after the transfer; for "
-              "scratch, after one interval)", THESIS]
+              "scratch, after one interval)", experiment.thesis]
     return lines
 
 
@@ -253,25 +260,38 @@ def plot_curves(curves, experiment, path):
     plt.close(fig)
 
 
+#: Views of a task space: planar arms (x, y); 3-D ones front (x, y), side (z, y), top (x, z).
+VIEWS = {2: ((0, 1),), 3: ((0, 1), (2, 1), (0, 2))}
+
+
 def plot_task_spaces(experiment, path):
-    """Fig. 6-5: the two arms' reachable task spaces, X_bounds and the target's test points."""
-    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
+    """Fig. 6-5 / 6-9: the two robots' reachable task spaces (world frame, y up), the target's
+    X_bounds and its test points; a 3-D task space is drawn in three projections."""
     rng = np.random.default_rng(0)
-    for side, colour in (("source", "tab:blue"), ("target", "tab:orange")):
-        robot = experiment.robots[side]
-        kinematics = robot_kinematics(robot)
-        reached = kinematics.forward(sample_joint_uniform(4000, kinematics.joint_limits, rng))
-        ax.scatter(reached[:, 0], reached[:, 1], s=1, color=colour, alpha=0.4,
-                   label=f"{side}: {robot.name}")
+    reached = {}
+    for side in ("source", "target"):
+        kinematics = robot_kinematics(experiment.robots[side])
+        reached[side] = kinematics.forward(sample_joint_uniform(4000, kinematics.joint_limits,
+                                                                rng))
     target = robot_kinematics(experiment.robots["target"], experiment.target_home)
     points = evaluation_points(target, experiment.x_bounds, spacing=experiment.eval_spacing)
-    ax.scatter(points[:, 0], points[:, 1], s=8, marker="x", color="k",
-               label=f"target test points ({len(points)})")
-    (x0, y0), (x1, y1) = experiment.x_bounds
-    ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], "k--", lw=1, label="target X_bounds")
-    ax.set(xlabel="x (m)", ylabel="y (m)", aspect="equal",
-           title="Thesis Fig. 6-5: task spaces of the two arms")
-    ax.legend(markerscale=4, fontsize=8, loc="lower left")
+    low, high = (np.asarray(b, dtype=np.float64) for b in experiment.x_bounds)
+    views = VIEWS[points.shape[1]]
+    fig, axes = plt.subplots(1, len(views), figsize=(6 * len(views), 6), squeeze=False,
+                             constrained_layout=True)
+    for ax, (h, v) in zip(axes[0], views):
+        for side, colour in (("source", "tab:blue"), ("target", "tab:orange")):
+            ax.scatter(reached[side][:, h], reached[side][:, v], s=1, color=colour, alpha=0.4,
+                       label=f"{side}: {experiment.robots[side].name}")
+        ax.scatter(points[:, h], points[:, v], s=8, marker="x", color="k",
+                   label=f"target test points ({len(points)})")
+        ax.plot([low[h], high[h], high[h], low[h], low[h]],
+                [low[v], low[v], high[v], high[v], low[v]], "k--", lw=1,
+                label="target X_bounds")
+        ax.set(xlabel="xyz"[h] + " (m)", ylabel="xyz"[v] + " (m)", aspect="equal")
+        ax.legend(markerscale=4, fontsize=8, loc="lower left")
+    fig.suptitle(f"Thesis Fig. {'6-5' if len(views) == 1 else '6-9'}: task spaces of the two "
+                 f"robots (world frame, gravity along -y)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
