@@ -46,8 +46,10 @@ Parameters:
   :func:`~lpa_transfer.negative_transfer.chain_lipschitz` of the robot's links (planar or
   serial).
 * ``eval_low``, ``eval_high`` (double arrays, default X_bounds): the box of the test points;
-  ``eval_spacing`` (m, 0.05): their grid spacing (:func:`lpa_transfer.reaching.
-  evaluation_points`; computed once at start-up, the node does not start without any);
+  ``eval_spacing`` (m, 0.05): their grid spacing; ``eval_joint_samples`` (20000): the joint
+  samples that find the reachable grid points (:func:`lpa_transfer.reaching.
+  evaluation_points`; a 3-D box needs more than a planar one to find its thin parts;
+  computed once at start-up, the node does not start without any);
   ``reaching_threshold`` (m, 0.01, §6.5.1).
 * ``step_service``, ``reset_service`` (default ``robot_sim/step``, ``robot_sim/reset``,
   resolved in the node's namespace); ``call_timeout`` (s, 30) for each robot call;
@@ -139,12 +141,14 @@ class GoalBabblingLearner(Node):
         eval_bounds = (doubles("eval_low") or self.x_bounds[0],
                        doubles("eval_high") or self.x_bounds[1])
         eval_spacing = float(declare("eval_spacing", 0.05))
+        eval_joint_samples = declare("eval_joint_samples", 20000)
         self.threshold = float(declare("reaching_threshold", 0.01))
         self.call_timeout = float(declare("call_timeout", 30.0))
         self.wait_timeout = float(declare("wait_timeout", 30.0))
         self.check_hyperparameters(physics_step)
         self.points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
-                                        spacing=eval_spacing)
+                                        spacing=eval_spacing,
+                                        n_joint_samples=eval_joint_samples)
         if not len(self.points):
             raise ValueError(f"no test points: no point of the grid of {eval_spacing:g} m over "
                              f"the box {np.round(eval_bounds, 6).tolist()} is reachable (check "

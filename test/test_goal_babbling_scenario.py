@@ -84,3 +84,53 @@ def test_merge_results_joins_shares_and_refuses_a_repeated_seed(smoke_run, tmp_p
     twice = subprocess.run([sys.executable, str(script), str(tmp_path / "twice"), str(smoke_run),
                             str(smoke_run)], capture_output=True, text=True, cwd=ROOT)
     assert twice.returncode != 0 and "more than one run" in twice.stderr
+
+
+# -- experiment 2 (§6.5.2): Nao -> Poppy, nao_poppy.yaml with the same smoke override ----------
+NAO_POPPY = ("scratch", "LPA/T20", "LPA-guarded/T20")
+
+
+@pytest.fixture(scope="module")
+def nao_poppy_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("nao_poppy") / "run"
+    result = run_scenario(SCENARIO, out, "nao_poppy.yaml", timeout=280,
+                          overrides=["smoke.yaml"])
+    assert result.returncode == 0, result.stdout + result.stderr
+    return out
+
+
+def test_nao_poppy_transfers_nao_experience_after_guided_exploration(nao_poppy_run):
+    """LPA only, as the thesis; Nao's experience after T_guided is transferred (§6.5.2): of
+    its 600 samples (60 s) the last 400."""
+    results = json.loads((nao_poppy_run / "results.json").read_text())
+    curves, settings = results["curves"], results["settings"]
+    assert sorted(curves) == sorted(NAO_POPPY)
+    assert settings["transfer_from_guided"] and settings["reaching_threshold"] == 0.015
+    assert settings["robot_files"]["target"].endswith("poppy_right_arm.toml")
+    for name in NAO_POPPY:
+        assert curves[name][0]["times"] == [20.0, 40.0, 60.0]
+    assert curves["LPA/T20"][0]["n_transferred"] == [400] * 3
+    guarded = curves["LPA-guarded/T20"][0]["n_transferred"]
+    assert guarded[-1] <= guarded[0] <= 400
+    assert "nao_right_arm -> poppy_right_arm" in (nao_poppy_run / "report.txt").read_text()
+
+
+def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
+    """Guided exploration pairs (q̄, x) with q̄ Poppy's joints 1-4 and Nao's 0-3 (7-D rows);
+    each side's task point is its own arm's, the other joints at home."""
+    with np.load(nao_poppy_run / "guided_0.npz") as pairs:
+        source, target = pairs["source"], pairs["target"]
+    assert source.shape == target.shape == (200, 7)
+    for rows, name, home, joints in ((source, "nao", [0.2, -0.7, 0.4, 1.3, 0.0], [0, 1, 2, 3]),
+                                     (target, "poppy", [0.0, 0.2, -0.7, 0.4, 1.3],
+                                      [1, 2, 3, 4])):
+        robot = load_robot_params(ROOT / "scenarios" / "robots" / f"{name}_right_arm.toml")
+        q = np.tile(home, (len(rows), 1))
+        q[:, joints] = rows[:, :4]
+        # 1e-4 m: the held joint sways by a few 1e-5 rad under the moving arm's load
+        np.testing.assert_allclose(rows[:, 4:], robot_kinematics(robot).forward(q), atol=1e-4)
+    assert np.median(np.abs(source[:, :4] - target[:, :4])) < 0.02    # the same commands
+    topics = summary(nao_poppy_run / "run.mcap")
+    assert topics["/correspondences"].message_count == 200
+    # the empty model's evaluation, then 3 of each of the 3 target runs
+    assert topics["/target/reaching_evaluation"].message_count == 10

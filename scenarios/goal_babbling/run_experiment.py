@@ -58,7 +58,8 @@ from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  #
 
 SETTINGS = ("seeds_done", "source_seconds", "total_seconds", "guided_seconds", "interval",
             "methods", "guarded", "reaching_threshold", "transfer_from_guided", "robot_files",
-            "target_home", "x_bounds", "eval_spacing", "steps_per_second", "thesis")
+            "target_home", "x_bounds", "eval_spacing", "eval_joint_samples", "steps_per_second",
+            "thesis")
 THESIS = ("thesis §6.5.1 (Fig. 6-6/6-7, read from the text): transfer boosts learning at "
           "once; LPA helps the final performance when applied at 180 s and beyond, and "
           "transfers negatively from 60 s of guided exploration; PA transfers negatively")
@@ -89,6 +90,7 @@ class Experiment(Node):
                         c_min=declare("c_min", 1e-7))
         self.x_bounds = (list(declare("x_low", [0.0])), list(declare("x_high", [0.0])))
         self.eval_spacing = float(declare("eval_spacing", 0.05))
+        self.eval_joint_samples = declare("eval_joint_samples", 20000)
         self.output_dir = Path(declare("output_dir", "."))
         if not 0 < max(self.guided_seconds) <= self.total_seconds:
             raise ValueError(f"guided_seconds must lie in (0, total_seconds], got "
@@ -274,7 +276,8 @@ def plot_task_spaces(experiment, path):
         reached[side] = kinematics.forward(sample_joint_uniform(4000, kinematics.joint_limits,
                                                                 rng))
     target = robot_kinematics(experiment.robots["target"], experiment.target_home)
-    points = evaluation_points(target, experiment.x_bounds, spacing=experiment.eval_spacing)
+    points = evaluation_points(target, experiment.x_bounds, spacing=experiment.eval_spacing,
+                               n_joint_samples=experiment.eval_joint_samples)
     low, high = (np.asarray(b, dtype=np.float64) for b in experiment.x_bounds)
     views = VIEWS[points.shape[1]]
     fig, axes = plt.subplots(1, len(views), figsize=(6 * len(views), 6), squeeze=False,
