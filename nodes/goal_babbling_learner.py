@@ -29,6 +29,10 @@ Parameters:
   planar chains learn (x, y), serial chains world (x, y, z)).
 * ``home`` (double array, default zero clipped into the joint limits): q_home, where babbling
   starts and returns to (:class:`~lpa_transfer.goal_babbling.GoalBabbling`).
+* ``active_joints`` (integer array, default all): babble with these joints only, the others
+  held at home (:func:`lpa_transfer.guided_exploration.hold_at_home`); rows stay (q, x) of
+  all joints, and the test points are those the active joints reach. A source robot
+  explores like this when only its joints shared with the target are transferred (§6.5.2).
 * ``x_low``, ``x_high`` (double arrays, required): X_bounds, the task box goals are drawn
   from (m).
 * GoalBabbling's hyperparameters: ``n_subtargets`` (T, 10), ``sigma`` (0.1), ``drift``
@@ -91,6 +95,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
+from lpa_transfer.guided_exploration import hold_at_home
 from lpa_transfer.negative_transfer import GuardedModel, chain_lipschitz
 from lpa_transfer.reaching import evaluate_reaching, evaluation_points
 from lpa_transfer.robot_environment import stepped_environment, task_dims
@@ -124,6 +129,9 @@ class GoalBabblingLearner(Node):
             raise ValueError("the parameter 'robot' (a robot .toml file) is required")
         self.robot = load_robot_params(os.path.expanduser(path))
         self.kinematics = robot_kinematics(self.robot, doubles("home") or None)
+        active = array_parameter(self, "active_joints", Parameter.Type.INTEGER_ARRAY)
+        if active:   # the other joints held at home (their ranges shrink to it)
+            self.kinematics = hold_at_home(self.kinematics, active)
         self.n_task = task_dims(self.kinematics)
         x_low, x_high = doubles("x_low"), doubles("x_high")
         if not x_low or not x_high:

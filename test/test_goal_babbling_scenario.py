@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer.bag import summary
+from lpa_transfer.bag import read_messages, summary
 from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.robot_params import load_robot_params
 from ros_harness import run_scenario
@@ -132,5 +132,11 @@ def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
     assert np.median(np.abs(source[:, :4] - target[:, :4])) < 0.02    # the same commands
     topics = summary(nao_poppy_run / "run.mcap")
     assert topics["/correspondences"].message_count == 200
+    # Nao babbles with its 4 shared joints (active_joints): its wrist never leaves home
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import JointState
+    wrist = [deserialize_message(m.data, JointState).position[4] for m in read_messages(
+        nao_poppy_run / "run.mcap", topics=["/source/joint_states"])]
+    assert len(wrist) > 600 and np.abs(wrist).max() < 1e-3
     # the empty model's evaluation, then 3 of each of the 3 target runs
     assert topics["/target/reaching_evaluation"].message_count == 10

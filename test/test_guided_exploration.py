@@ -4,8 +4,8 @@ import pytest
 
 from lpa_transfer.babbling import Kinematics
 from lpa_transfer.goal_babbling import GoalBabbling
-from lpa_transfer.guided_exploration import (guided_exploration, pad_transferred, restrict,
-                                             shared_limits)
+from lpa_transfer.guided_exploration import (guided_exploration, hold_at_home, pad_transferred,
+                                             restrict, shared_limits)
 from lpa_transfer.kinematics import planar_forward_kinematics
 from two_link import GB_SOURCE_LINKS, GB_TARGET_BOUNDS, GB_TARGET_LINKS, table_6_1_arm
 
@@ -52,6 +52,23 @@ def test_restrict_moves_only_the_given_joints():
     np.testing.assert_array_equal(narrowed.home, [-0.8, 1.0])   # home clipped into them
     with pytest.raises(ValueError, match="joint_limits must be 2 finite"):
         restrict(robot, [1, 2], [(0.0, 1.0)])
+
+
+def test_hold_at_home_babbles_only_the_given_joints_with_full_rows():
+    """The source of §6.5.2 explores with its shared joints only: goal babbling on the held
+    robot never moves the other joint, and its rows keep every joint."""
+    robot = torso_arm()
+    held = hold_at_home(robot, [1, 2])
+    np.testing.assert_array_equal(held.joint_limits[0], [0.3, 0.3])
+    np.testing.assert_array_equal(held.joint_limits[1:], TORSO_LIMITS[1:])
+    babbling = GoalBabbling(((-0.5, -1.0), (1.2, 1.0)), seed=3).start(held)
+    q, x = babbling.run_for(30.0)
+    assert q.shape == (300, 3)
+    np.testing.assert_array_equal(q[:, 0], 0.3)
+    assert np.ptp(q[:, 1]) > 0.3 and np.ptp(q[:, 2]) > 0.3
+    np.testing.assert_allclose(x, robot.forward(q))
+    with pytest.raises(ValueError, match="distinct joint indices"):
+        hold_at_home(robot, [1, 3])
 
 
 def test_shared_limits_intersect_the_ranges():
