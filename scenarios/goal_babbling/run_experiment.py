@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Thesis §6.5.1 over the node graph: does transfer accelerate goal babbling?
+"""Thesis §6.5.1 and §6.5.2 over the node graph: does transfer accelerate goal babbling?
 
-Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML). Running:
+The robots, boxes and times come from the scenario YAML: config.yaml is experiment 1 (two
+2-link arms, Table 6.1), nao_poppy.yaml experiment 2 (Nao -> Poppy). Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML). Running:
 two robot_sim nodes in position mode (``/source``, ``/target``), a goal_babbling_learner for
 the source (``/source/learner``), two for the target (``/target/learner`` as the thesis, and
 ``/target/guarded_learner`` with the guard against negative transfer), ``lpa_mapping`` and the
@@ -26,8 +27,9 @@ For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling_experiment
    again on the guarded learner.
 
 Writes into ``output_dir`` after every seed: ``results.json``, ``learning_curves.csv``,
-``fig6_5_task_spaces.png``, ``fig6_6_7_learning_curves.png`` (reaching error and rate, mean ±
-std over seeds, one column per method) and ``report.txt`` (time to reach the scratch
+``fig6_5_task_spaces.png`` (Fig. 6-5; for 3-D robots such as Nao -> Poppy, Fig. 6-9 in three
+projections), ``fig6_6_7_learning_curves.png`` (reaching error and rate, mean ± std over seeds,
+one column per method; Fig. 6-10 for Nao -> Poppy) and ``report.txt`` (time to reach the scratch
 learner's final reaching rate, time saved).
 """
 import csv
@@ -256,8 +258,10 @@ def plot_curves(curves, experiment, path):
             if row == 1:
                 ax.set(xlabel="learning time (s of simulated babbling)", ylim=(0, 1.02))
                 ax.legend(title="T_guided", fontsize=8)
-    fig.suptitle(f"Thesis Fig. 6-6/6-7: target learning from scratch (black) and after "
-                 f"transfer; mean ± std over {len(experiment.seeds_done)} seed(s)")
+    figure = "6-6/6-7" if len(experiment.x_bounds[0]) == 2 else "6-10"
+    fig.suptitle(f"Thesis Fig. {figure}: {experiment.robots['target'].name} learning from "
+                 f"scratch (black) and after transfer from {experiment.robots['source'].name}; "
+                 f"mean ± std over {len(experiment.seeds_done)} seed(s)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
