@@ -57,17 +57,27 @@ def _axis_rotations(axis, angles):
     return rotations
 
 
-def tool_transforms(robot, q):
-    """Homogeneous end-effector transforms T_tool(q) (N, 4, 4) in the world frame."""
+def chain_frames(robot, q):
+    """World frames (N, n + 1, 4, 4) of every joint (its origin, after its rotation q_i) and,
+    last, of the tool, for joint angles ``q`` (N, n): the partial products of the chain in
+    the module docstring (e.g. to measure link lengths or compare two arms' postures)."""
     q = as_matrix(q, "q")
     if q.shape[1] != robot.n_joints:
         raise ValueError(f"q must have shape (N, {robot.n_joints}) (one row of joint angles per "
                          f"sample), got shape {q.shape}")
-    frames = np.tile(_transform(robot.base_xyz, robot.base_rpy), (len(q), 1, 1))
+    frame = np.tile(_transform(robot.base_xyz, robot.base_rpy), (len(q), 1, 1))
+    frames = []
     for i in range(robot.n_joints):
         origin = _transform(robot.joint_xyz[i], robot.joint_rpy[i])
-        frames = frames @ origin @ _axis_rotations(robot.joint_axes[i], q[:, i])
-    return frames @ _transform(robot.tool_xyz, robot.tool_rpy)
+        frame = frame @ origin @ _axis_rotations(robot.joint_axes[i], q[:, i])
+        frames.append(frame)
+    frames.append(frame @ _transform(robot.tool_xyz, robot.tool_rpy))
+    return np.stack(frames, axis=1)
+
+
+def tool_transforms(robot, q):
+    """Homogeneous end-effector transforms T_tool(q) (N, 4, 4) in the world frame."""
+    return chain_frames(robot, q)[:, -1]
 
 
 def forward_kinematics(robot, q):

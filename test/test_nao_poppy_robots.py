@@ -28,14 +28,7 @@ def robots():
 
 def joint_origins(robot, q):
     """World positions of every joint origin and the tool of ``robot`` at one pose ``q``."""
-    frame = serial_chain._transform(robot.base_xyz, robot.base_rpy)
-    points = []
-    for i in range(robot.n_joints):
-        frame = frame @ serial_chain._transform(robot.joint_xyz[i], robot.joint_rpy[i]) \
-            @ serial_chain._axis_rotations(robot.joint_axes[i], np.array([q[i]]))[0]
-        points.append(frame[:3, 3].copy())
-    return np.array(points + [(frame @ serial_chain._transform(robot.tool_xyz,
-                                                                robot.tool_rpy))[:3, 3]])
+    return serial_chain.chain_frames(robot, np.asarray(q, dtype=np.float64)[None])[0, :, :3, 3]
 
 
 def unit(v):

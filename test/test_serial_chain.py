@@ -9,8 +9,9 @@ p = pytest.importorskip("pybullet")
 from lpa_transfer.kinematics import planar_forward_kinematics  # noqa: E402
 from lpa_transfer.planar_chain import inverse_dynamics, load_fixed_robot  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
-from lpa_transfer.serial_chain import (forward_kinematics, matrix_rpy, rpy_matrix,  # noqa: E402
-                                       serial_chain_urdf, urdf_joint_armatures)
+from lpa_transfer.serial_chain import (chain_frames, forward_kinematics, matrix_rpy,  # noqa: E402
+                                       rpy_matrix, serial_chain_urdf, tool_transforms,
+                                       urdf_joint_armatures)
 from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
 
 ROBOTS = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
@@ -194,6 +195,23 @@ def test_rpy_round_trip_including_gimbal_lock():
         rotation = rpy_matrix(rpy)
         np.testing.assert_allclose(rotation @ rotation.T, np.eye(3), atol=1e-12)
         np.testing.assert_allclose(rpy_matrix(matrix_rpy(rotation)), rotation, atol=1e-12)
+
+
+def test_chain_frames_are_the_partial_products_of_the_chain():
+    """Joint i's frame sits at its origin (its own rotation does not move it), the last frame
+    is the tool's, and link lengths do not depend on the pose."""
+    arm = robot("youbot_arm")
+    q = random_poses(arm, 5, seed=3)
+    frames = chain_frames(arm, q)
+    assert frames.shape == (5, arm.n_joints + 1, 4, 4)
+    np.testing.assert_allclose(frames[:, -1], tool_transforms(arm, q))
+    np.testing.assert_allclose(frames[:, -1, :3, 3], forward_kinematics(arm, q))
+    moved = q.copy()
+    moved[:, 2] += 0.7          # turning joint 2 leaves the origins up to joint 2 in place
+    np.testing.assert_allclose(chain_frames(arm, moved)[:, :3, :3, 3], frames[:, :3, :3, 3],
+                               atol=1e-12)
+    lengths = np.linalg.norm(np.diff(frames[:, :, :3, 3], axis=1), axis=2)
+    np.testing.assert_allclose(lengths, np.broadcast_to(lengths[0], lengths.shape), atol=1e-12)
 
 
 def test_forward_kinematics_rejects_bad_joint_arrays():
