@@ -44,10 +44,13 @@ if [[ ! -x $VENV/bin/python ]]; then
 fi
 
 # 3. Pinned requirements (the ROS wheels, the scientific stack, test tools).
-req_hash=$(sha256sum requirements/*.txt | digest)
+# requirements/constraints/build.txt pins the build environments of source-only packages
+# (pip applies PIP_CONSTRAINT to those too).
+req_hash=$(sha256sum requirements/*.txt requirements/constraints/build.txt | digest)
 if ! up_to_date requirements "$req_hash"; then
-    say "installing requirements/*.txt (about 1-2 min on a fresh venv)"
-    pip_install $(printf -- '-r %s ' requirements/*.txt)
+    say "installing requirements/*.txt (about 2-3 min on a fresh venv)"
+    PIP_CONSTRAINT=$ROOT/requirements/constraints/build.txt \
+        pip_install $(printf -- '-r %s ' requirements/*.txt)
     mark_done requirements "$req_hash"
     did_something=1
 fi
