@@ -202,18 +202,30 @@ def report_lines(curves, experiment):
              f"simulated second), reaching threshold {1e3 * experiment.reaching_threshold:g} mm",
              f"scratch reaches its final reaching rate {scratch_rate[-1]:.3f} first at "
              f"{time_saved(times, scratch_rate, times, scratch_rate)[1]:g} s", "",
-             f"{'condition':<22} {'rate after transfer':>19} {'final rate':>11} "
-             f"{'final error (mm)':>16} {'reaches scratch final':>22} {'time saved':>10}"]
+             f"{'condition':<22} {'rate after transfer':>19} {'(scratch then)':>14} "
+             f"{'final rate':>11} {'final error (mm)':>16} {'reaches scratch final':>22} "
+             f"{'time saved':>10}"]
     for name, runs in curves.items():
         t, rate, rate_std = mean_curve(runs, "rate")
         _, error, error_std = mean_curve(runs, "mean_error")
         level, _, reach, saved = time_saved(times, scratch_rate, t, rate)
-        lines.append(f"{name:<22} {rate[0]:>19.3f} {rate[-1]:>5.3f} ± {rate_std[-1]:.3f} "
+        scratch_then = np.interp(t[0], times, scratch_rate, left=0.0)
+        lines.append(f"{name:<22} {rate[0]:>19.3f} {scratch_then:>14.3f} "
+                     f"{rate[-1]:>5.3f} ± {rate_std[-1]:.3f} "
                      f"{1e3 * error[-1]:>8.1f} ± {1e3 * error_std[-1]:4.1f} "
                      f"{'never' if np.isinf(reach) else f'{reach:g} s':>22} "
                      f"{'-' if name == 'scratch' or np.isinf(saved) else f'{saved:.0%}':>10}")
     lines += ["", "'rate after transfer': the first evaluation (right after the transfer; for "
-              "scratch, after one interval)", experiment.thesis]
+              "scratch, after one interval); '(scratch then)': the scratch learner's mean rate "
+              "at that time (0 before its first evaluation)", "",
+              "mean reaching rate at every evaluation (learning time in s):",
+              f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
+    for name, runs in curves.items():
+        t, rate, _ = mean_curve(runs, "rate")
+        cells = {round(float(x), 6): f"{r:5.2f}" for x, r in zip(t, rate)}
+        lines.append(f"{name:<22} " + " ".join(cells.get(round(float(x), 6), "    -")
+                                                for x in times))
+    lines += ["", experiment.thesis]
     return lines
 
 
