@@ -272,7 +272,7 @@ def plot_curves(curves, experiment, path):
                 ax.legend(title="T_guided", fontsize=8)
     figure = "6-6/6-7" if len(experiment.x_bounds[0]) == 2 else "6-10"
     fig.suptitle(f"Thesis Fig. {figure}: {experiment.robots['target'].name} learning from "
-                 f"scratch (black) and after transfer from {experiment.robots['source'].name}; "
+                 f"scratch (black) and after transfer\nfrom {experiment.robots['source'].name}; "
                  f"mean ± std over {len(experiment.seeds_done)} seed(s)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
