@@ -1,0 +1,119 @@
+"""Experiment 2 of thesis ch. 6 (§6.5.2, Nao -> Poppy) in process, on the analytic arms, at
+several movement rates: how the number of movements a simulated second changes learning
+from scratch and the benefit of transfer. scenarios/goal_babbling/nao_poppy.yaml chose its
+rate (4 a second) from the scratch rows of this table: the rate at which our scratch
+learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
+
+    nice -n 10 python bench/nao_poppy_rates.py --rates 2 3 4 10 --seeds 0 1
+
+The robots, homes, boxes, test points (200 000 joint samples), threshold, LPA and guard are
+those of nao_poppy.yaml; Nao babbles with its 4 shared joints. The pieces are the library's
+(the graph runs the same ones in separate processes, on pybullet): this is kinematic, not
+physical, and its seeds are not the graph's. Not run in CI: one rate and seed takes ~20-60 s.
+Prints, per rate and seed, the reaching rate every 600 s for scratch, guided exploration
+alone (no transfer), LPA transfer, and LPA transfer behind the guard.
+"""
+import argparse
+import os
+import sys
+from pathlib import Path
+
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+
+from lpa_transfer.babbling import robot_kinematics  # noqa: E402
+from lpa_transfer.goal_babbling import GoalBabbling  # noqa: E402
+from lpa_transfer.guided_exploration import guided_exploration, hold_at_home  # noqa: E402
+from lpa_transfer.local_procrustes import LocalProcrustesAnalysis  # noqa: E402
+from lpa_transfer.negative_transfer import GuardedModel, chain_lipschitz  # noqa: E402
+from lpa_transfer.reaching import evaluate_reaching, evaluation_points  # noqa: E402
+from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer.sensorimotor import make_sensorimotor_model  # noqa: E402
+from lpa_transfer.transfer_babbling import (initialise_with_transfer, padded_rows,  # noqa: E402
+                                            transfer_experience)
+
+CONFIG = yaml.safe_load((ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml").read_text())
+CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded")
+
+
+def params(node):
+    return CONFIG[node]["ros__parameters"]
+
+
+def setting():
+    """Both arms' kinematics, boxes and the shared joints, from nao_poppy.yaml."""
+    source, target = params("/source/learner"), params("/target/learner")
+    robots = {side: load_robot_params(ROOT / p["robot"]) for side, p in
+              (("source", source), ("target", target))}
+    arms = {side: robot_kinematics(robots[side], p["home"])
+            for side, p in (("source", source), ("target", target))}
+    boxes = {side: (tuple(p["x_low"]), tuple(p["x_high"]))
+             for side, p in (("source", source), ("target", target))}
+    return robots, arms, boxes, params("experiment")
+
+
+def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
+    robots, arms, boxes, experiment = setting()
+    shared = {side: experiment[f"{side}_joints"] for side in ("source", "target")}
+    home = np.asarray(params("/target/learner")["home"])
+    points = evaluation_points(arms["target"], boxes["target"], spacing=0.05,
+                               n_joint_samples=200000)
+    threshold = experiment["reaching_threshold"]
+    seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
+
+    def babbler(side, stream, **kw):
+        return GoalBabbling(boxes[side], seed=seeds[stream], steps_per_second=rate, **kw)
+
+    def curve(babbling, model, start):
+        rates = []
+        babbling.run_for(total - start, lambda b: rates.append(evaluate_reaching(
+            model.inverse, arms["target"], points, threshold).rate), interval)
+        return rates
+
+    nao = babbler("source", 0).start(hold_at_home(arms["source"], shared["source"]))
+    q_s, x_s = nao.run_for(total)
+    scratch = babbler("target", 1).start(arms["target"])
+    curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
+    guide = babbler("target", 1, home=home[shared["target"]])
+    pairs = guided_exploration(guide, arms["source"], arms["target"], shared["source"],
+                               shared["target"], guided, make_sensorimotor_model(forward=False))
+    lpa = LocalProcrustesAnalysis(n_min=experiment["n_min"], c_min=experiment["c_min"],
+                                  random_state=seeds[2]).fit(*pairs)
+    after = int(round(guided * rate))       # Nao's experience after T_guided (§6.5.2)
+    commands, task_points = transfer_experience(
+        lpa, np.hstack((q_s[after:, shared["source"]], x_s[after:])), home, shared["target"])
+    own = padded_rows(pairs[1], home, shared["target"])
+    for name in CONDITIONS[1:]:
+        model = make_sensorimotor_model(forward=False)
+        if name == "LPA-guarded":
+            model = GuardedModel(model, lipschitz=chain_lipschitz(robots["target"].link_lengths))
+        model.update(*own)
+        if name != "guided only":
+            initialise_with_transfer(model, commands, task_points)
+        first = evaluate_reaching(model.inverse, arms["target"], points, threshold).rate
+        curves[name] = [first] + curve(babbler("target", 3).start(arms["target"], model),
+                                       model, guided)
+    return curves
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 3.0, 4.0, 10.0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    args = parser.parse_args()
+    print("reaching rate; scratch at 600, 1200, ... 4800 s; the others at 600 s (right "
+          "after the transfer), 1200, ... 4800 s")
+    for rate in args.rates:
+        for seed in args.seeds:
+            print(f"\n{rate:g} movements a simulated second, seed {seed}")
+            for name, values in run(rate, seed).items():
+                print(f"  {name:<12}" + "".join(f"{v:6.2f}" for v in values))
+
+
+if __name__ == "__main__":
+    main()
