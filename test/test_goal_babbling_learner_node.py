@@ -230,3 +230,11 @@ def test_a_learner_without_test_points_does_not_start(tmp_path):
     learner.process.wait(timeout=30)
     assert learner.stop() == 1
     assert "cannot start: no test points" in learner.log()
+
+
+def test_a_learner_with_unknown_active_joints_does_not_start(tmp_path):
+    learner = NodeProcess("goal_babbling_learner", unique_domain_id(), tmp_path, ros_params(
+        **dict(LEARNER, active_joints="[0, 2]")))
+    learner.process.wait(timeout=30)
+    assert learner.stop() == 1
+    assert "joints must hold distinct joint indices in [0, 2)" in learner.log()
