@@ -5,6 +5,7 @@ import signal
 import threading
 import time
 import traceback
+import weakref
 
 import numpy as np
 import rclpy
@@ -146,8 +147,21 @@ class ServiceTimeout(RuntimeError):
     """A service did not appear or answer in time."""
 
 
+#: Clients whose first wait has let discovery settle (see :func:`wait_for_services`).
+_SETTLED = weakref.WeakSet()
+#: How long a client's first wait lets discovery settle once its service is available (s).
+SETTLE_SECONDS = 0.5
+
+
 def wait_for_services(clients, timeout, stop):
-    """Wait until every client's service is available; ServiceTimeout after ``timeout`` s."""
+    """Wait until every client's service is available; ServiceTimeout after ``timeout`` s.
+
+    The first wait of a client then lets DDS discovery settle for ``SETTLE_SECONDS``: Fast
+    DDS reports a service available once the client has matched the server, which may not
+    yet have matched the client's response reader; a request sent in that window is
+    answered into the void (the server logs "failed to send response (timeout)") and the
+    call times out. Seen once in CI, on a test's first StepRobot call.
+    """
     deadline = time.monotonic() + timeout
     for client in clients:
         while not client.wait_for_service(timeout_sec=0.2):
@@ -157,6 +171,9 @@ def wait_for_services(clients, timeout, stop):
             if time.monotonic() > deadline:
                 raise ServiceTimeout(f"service {client.srv_name} is not available after "
                                      f"{timeout:g} s (is its node running, in this ROS domain?)")
+    fresh = [client for client in clients if client not in _SETTLED]
+    if fresh and not stop.wait(SETTLE_SECONDS):
+        _SETTLED.update(fresh)
 
 
 def wait_for_subscribers(node, topic, count, timeout, stop):
