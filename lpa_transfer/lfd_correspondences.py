@@ -242,8 +242,9 @@ def mapping_error(model, demonstrator_rows, robot_rows, robot, robot_home=None):
     simulated robots" gives the adapted trajectories in task space, and the mapping error
     (Fig. 4-10, Table 4.3, "less than 0.01 m") is their distance to the ground-truth task
     points. That is ``executed``, ||FK_R(q̂_R) − x_R|| with the robot's other joints at
-    ``robot_home`` (q̂_R as mapped, not clipped into the limits); ``estimated`` is ||x̂_R − x_R||, the model's own task coordinates. Both
-    are per row, in metres: take ``.mean()`` for Fig. 4-10's average.
+    ``robot_home`` (q̂_R as mapped, not clipped into the limits); ``estimated`` is
+    ||x̂_R − x_R||, the model's own task coordinates. Both are per row, in metres: take
+    ``.mean()`` for Fig. 4-10's average.
     """
     robot_rows = check.as_matrix(robot_rows, "robot_rows")
     n_joints = robot_rows.shape[1] - 3

@@ -70,7 +70,8 @@ def test_shoulders_coincide_and_nao_box_is_the_thesis_box_scaled(robots):
     ratio = (np.linalg.norm(joint_origins(nao, np.zeros(5))[-1] - shoulder_nao)
              / np.linalg.norm(joint_origins(poppy, URDF_ZERO)[-1] - shoulder_poppy))
     assert ratio == pytest.approx(0.6157, abs=1e-3)
-    learners = {side: CONFIG[f"/{side}/learner"]["ros__parameters"] for side in ("source", "target")}
+    learners = {side: CONFIG[f"/{side}/learner"]["ros__parameters"]
+                for side in ("source", "target")}
     thesis = np.array([[0.1, 0.05, 0.4], [0.4, 0.3, 0.8]])
     np.testing.assert_allclose([learners["target"]["x_low"], learners["target"]["x_high"]], thesis)
     scaled = shoulder_poppy + ratio * (thesis - shoulder_poppy)

@@ -2,9 +2,10 @@
 """Thesis §6.5.1 and §6.5.2 over the node graph: does transfer accelerate goal babbling?
 
 The robots, boxes and times come from the scenario YAML: config.yaml is experiment 1 (two
-2-link arms, Table 6.1), nao_poppy.yaml experiment 2 (Nao -> Poppy). Part of run.sh, as the ROS node ``experiment`` (parameters in the scenario YAML). Running:
-two robot_sim nodes in position mode (``/source``, ``/target``), a goal_babbling_learner for
-the source (``/source/learner``), two for the target (``/target/learner`` as the thesis, and
+2-link arms, Table 6.1), nao_poppy.yaml experiment 2 (Nao -> Poppy). Part of run.sh, as the
+ROS node ``experiment`` (parameters in the scenario YAML). Running: two robot_sim nodes in
+position mode (``/source``, ``/target``), a goal_babbling_learner for the source
+(``/source/learner``), two for the target (``/target/learner`` as the thesis, and
 ``/target/guarded_learner`` with the guard against negative transfer), ``lpa_mapping`` and the
 recorder; correspondence_collector has run guided exploration (Alg. 7) for every seed, for the
 longest T_guided, and saved the pairs (one file per seed, in the order of ``seeds``). A
@@ -23,14 +24,14 @@ For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling_experiment
    joints the source lacks (§6.4.1); the target learner
    is reset and initialised with its own guided samples and the transferred ones, its clock at
    T_guided, and goal-babbles for the rest of ``total_seconds`` (with a seed of its own: the
-   learner restarts its babbler, and the guided exploration's goals should not repeat). With ``guarded``, the same
-   again on the guarded learner.
+   learner restarts its babbler, and the guided exploration's goals should not repeat).
+   With ``guarded``, the same again on the guarded learner.
 
 Writes into ``output_dir`` after every seed: ``results.json``, ``learning_curves.csv``,
 ``fig6_5_task_spaces.png`` (Fig. 6-5; for 3-D robots such as Nao -> Poppy, Fig. 6-9 in three
 projections), ``fig6_6_7_learning_curves.png`` (reaching error and rate, mean ± std over seeds,
-one column per method; Fig. 6-10 for Nao -> Poppy) and ``report.txt`` (time to reach the scratch
-learner's final reaching rate, time saved).
+one column per method; Fig. 6-10 for Nao -> Poppy) and ``report.txt`` (time to reach the
+scratch learner's final reaching rate, time saved).
 """
 import csv
 import json
@@ -205,11 +206,15 @@ def report_lines(curves, experiment):
              f"{'condition':<22} {'rate after transfer':>19} {'(scratch then)':>14} "
              f"{'final rate':>11} {'final error (mm)':>16} {'reaches scratch final':>22} "
              f"{'time saved':>10}"]
+    every_evaluation = []   # the mean rate of each condition at each of scratch's times
     for name, runs in curves.items():
         t, rate, rate_std = mean_curve(runs, "rate")
         _, error, error_std = mean_curve(runs, "mean_error")
         level, _, reach, saved = time_saved(times, scratch_rate, t, rate)
         scratch_then = np.interp(t[0], times, scratch_rate, left=0.0)
+        cells = {round(float(x), 6): f"{r:5.2f}" for x, r in zip(t, rate)}
+        every_evaluation.append(f"{name:<22} " + " ".join(
+            cells.get(round(float(x), 6), "    -") for x in times))
         lines.append(f"{name:<22} {rate[0]:>19.3f} {scratch_then:>14.3f} "
                      f"{rate[-1]:>5.3f} ± {rate_std[-1]:.3f} "
                      f"{1e3 * error[-1]:>8.1f} ± {1e3 * error_std[-1]:4.1f} "
@@ -220,12 +225,7 @@ def report_lines(curves, experiment):
               "at that time (0 before its first evaluation)", "",
               "mean reaching rate at every evaluation (learning time in s):",
               f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
-    for name, runs in curves.items():
-        t, rate, _ = mean_curve(runs, "rate")
-        cells = {round(float(x), 6): f"{r:5.2f}" for x, r in zip(t, rate)}
-        lines.append(f"{name:<22} " + " ".join(cells.get(round(float(x), 6), "    -")
-                                                for x in times))
-    lines += ["", experiment.thesis]
+    lines += every_evaluation + ["", experiment.thesis]
     return lines
 
 
