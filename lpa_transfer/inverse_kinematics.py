@@ -81,6 +81,81 @@ def _dls_step(J, error, damping):
     return J.T @ np.linalg.solve(J @ J.T + damping ** 2 * np.eye(len(error)), error)
 
 
+def solve_many(forward, x_targets, q_starts, joint_limits, damping=0.01, tolerance=1e-7,
+                max_iterations=200):
+    """:func:`solve` for many independent targets at once: ``(Q, residuals)``, row i solving
+    ``x_targets[i]`` from ``q_starts[i]``.
+
+    Every row runs :func:`solve`'s iteration (the same steps, halvings, nudges and stopping
+    rules, so it ends where :func:`solve` would, up to rounding), but each iteration calls
+    ``forward`` once on all rows still iterating (and their Jacobian offsets) instead of once
+    per row: collecting thousands of correspondences (§4.4.2) is one batched forward
+    kinematics per step. ``x_targets`` (N, m), ``q_starts`` (N, n).
+    """
+    limits = np.asarray(joint_limits, dtype=np.float64)
+    targets = np.atleast_2d(np.asarray(x_targets, dtype=np.float64))
+    q = np.clip(np.atleast_2d(np.asarray(q_starts, dtype=np.float64)), limits[:, 0],
+                limits[:, 1])
+    if len(q) != len(targets):
+        raise ValueError(f"x_targets has {len(targets)} rows but q_starts has {len(q)}")
+    n_rows, n = q.shape
+    if n_rows == 0:
+        return q.copy(), np.empty(0)
+    error = targets - forward(q)
+    best_q, best_norm = q.copy(), np.linalg.norm(error, axis=1)
+    nudges = np.full(n_rows, MAX_NUDGES)
+    active = np.arange(n_rows)
+    for _ in range(max_iterations):
+        active = active[np.linalg.norm(error[active], axis=1) >= tolerance]
+        if len(active) == 0:
+            break
+        qa, ea, xa = q[active], error[active], targets[active]
+        points = forward(np.concatenate([qa] + [qa + FD_STEP * np.eye(n)[j] for j in range(n)]))
+        base = points[:len(qa)]
+        J = np.stack([(points[(j + 1) * len(qa):(j + 2) * len(qa)] - base) / FD_STEP
+                      for j in range(n)], axis=2)                      # (rows, m, n)
+        step = _dls_steps(J, ea, damping)
+        pinned = ((qa <= limits[:, 0]) & (step < 0)) | ((qa >= limits[:, 1]) & (step > 0))
+        redo = pinned.any(axis=1)
+        if redo.any():   # joints held at a limit: the step of the others without them
+            step[redo] = _dls_steps(J[redo] * ~pinned[redo][:, None, :], ea[redo], damping)
+        norm = np.linalg.norm(ea, axis=1)
+        q_next, e_next = qa.copy(), ea.copy()
+        pending = np.arange(len(qa))
+        for _ in range(MAX_HALVINGS + 1):   # a full step can overshoot far from the target
+            trial = np.clip(qa[pending] + step[pending], limits[:, 0], limits[:, 1])
+            e_trial = xa[pending] - forward(trial)
+            better = np.linalg.norm(e_trial, axis=1) < norm[pending] * (1 - 1e-9)
+            q_next[pending[better]], e_next[pending[better]] = trial[better], e_trial[better]
+            pending = pending[~better]
+            if len(pending) == 0:
+                break
+            step[pending] /= 2
+        stalled = active[pending]   # a local minimum, or a singular pose
+        finished = stalled[nudges[stalled] == 0]
+        nudge = pending[nudges[stalled] > 0]
+        if len(nudge):
+            nudges[active[nudge]] -= 1
+            q_next[nudge] = _nudge(qa[nudge], limits)
+            e_next[nudge] = xa[nudge] - forward(q_next[nudge])
+        moving = np.setdiff1d(np.arange(len(qa)), np.searchsorted(active, finished))
+        rows = active[moving]
+        q[rows], error[rows] = q_next[moving], e_next[moving]
+        norm_next = np.linalg.norm(error[rows], axis=1)
+        improved = norm_next < best_norm[rows]
+        best_q[rows[improved]], best_norm[rows[improved]] = q[rows[improved]], \
+            norm_next[improved]
+        active = rows
+    return best_q, best_norm
+
+
+def _dls_steps(J, error, damping):
+    """:func:`_dls_step` for a stack of Jacobians (rows, m, n) and errors (rows, m)."""
+    m = J.shape[1]
+    JJt = J @ J.transpose(0, 2, 1) + damping ** 2 * np.eye(m)
+    return (J.transpose(0, 2, 1) @ np.linalg.solve(JJt, error[:, :, None]))[:, :, 0]
+
+
 def solve_path(forward, points, q_start, joint_limits, **options):
     """Joint angles for each task point of a path, each solve warm-started at the previous
     solution (so the arm keeps one elbow configuration along a line): ``(Q, residuals)``."""

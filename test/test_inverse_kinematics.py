@@ -3,7 +3,7 @@ on the §3.6 2-link robots (scenarios/robots/two_link_{source,target}.toml)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.inverse_kinematics import jacobian, solve, solve_path
+from lpa_transfer.inverse_kinematics import jacobian, solve, solve_many, solve_path
 from lpa_transfer.kinematics import planar_forward_kinematics
 from two_link import TARGET_LINKS, elbow_ik, robot
 
@@ -201,3 +201,41 @@ def test_a_stretched_arm_pulled_straight_in_leaves_the_singular_pose():
         q, residual = solve(forward, target, [0.0, 0.0], limits)
         assert residual < 1e-6, (target, q)
         assert np.allclose(forward(q[None])[0], target, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_solve_many_ends_where_solve_does_row_by_row(name):
+    """Reachable, unreachable (beyond the reach, inside the inner radius) and limit-bound
+    targets, with starts at limits and at the singular stretched pose: each row as solve."""
+    forward, (l1, l2), limits = arm(name)
+    rng = np.random.default_rng(3)
+    reachable = forward(rng.uniform(limits[:, 0], limits[:, 1], (20, 2)))
+    angles = rng.uniform(-np.pi, np.pi, 10)
+    ring = np.column_stack((np.cos(angles), np.sin(angles)))
+    targets = np.vstack((reachable, 1.2 * (l1 + l2) * ring, 0.2 * abs(l1 - l2) * ring))
+    starts = np.vstack((rng.uniform(-1, 4, (len(targets) - 2, 2)), [[0.0, 0.0], [0.3, 0.0]]))
+    Q, residuals = solve_many(forward, targets, starts, limits)
+    for i in range(len(targets)):
+        q, residual = solve(forward, targets[i], starts[i], limits)
+        np.testing.assert_allclose(Q[i], q, atol=1e-6)    # batched linear algebra rounds
+        assert residuals[i] == pytest.approx(residual, abs=1e-9)   # differently
+    assert (residuals[:20] < 1e-7).all() and (residuals[20:30] > 0.1 * (l1 + l2)).all()
+
+
+def test_solve_many_batches_the_forward_calls_and_checks_its_input():
+    forward, _, limits = arm("two_link_target")
+    calls = []
+
+    def recording(q):
+        calls.append(len(q))
+        return forward(q)
+
+    rng = np.random.default_rng(0)
+    targets = forward(rng.uniform(limits[:, 0], limits[:, 1], (50, 2)))
+    Q, residuals = solve_many(recording, targets, np.full((50, 2), 0.5), limits)
+    assert (residuals < 1e-6).all() and max(calls) == 3 * 50    # q and its 2 offsets at once
+    assert len(calls) < 0.2 * sum(calls)
+    Q, residuals = solve_many(forward, np.empty((0, 2)), np.empty((0, 2)), limits)
+    assert Q.shape == (0, 2) and residuals.shape == (0,)
+    with pytest.raises(ValueError, match="rows"):
+        solve_many(forward, targets, np.zeros((3, 2)), limits)
