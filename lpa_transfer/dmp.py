@@ -20,10 +20,16 @@ the thesis does not). The library fixes the rest, which the thesis leaves open:
   which is not used here).
 * N centres c_i = x(iτ/(N−1)), evenly spaced in time; h_i such that Ψ_i is 0.8 at c_{i+1}.
 * Fit ("τ ... set to the duration of the movement, q_g to the final configuration", §4.4.4):
-  velocities and accelerations of the demonstration by central finite differences
+  velocities and accelerations of each demonstration by central finite differences
   (``numpy.gradient``), the last ones set to 0; the target forcing term
   τ² q̈ − α_z (β_z (q_g − q) − τ q̇) at every sample; the weights by ridge regression on all
-  samples (coefficient ``regularization``, 0 = least squares).
+  samples (coefficient ``regularization``, 0 = least squares). ``fit_many`` learns one DMP
+  from several demonstrations, as §4.5.2 does ("We learned a DMP model from the 5
+  transferred demonstrations for each letter" and "reproduce the first demonstration"): τ is
+  their mean duration, each demonstration's times are rescaled to [0, τ] so the phases line
+  up, its targets use its own q_0 and q_g, and one regression runs on the samples of all of
+  them; start and goal are the first demonstration's. ``fit`` is ``fit_many`` on one
+  demonstration, which is the library's ``DMP.imitate``.
 * Reproduction: the ODE integrated over the requested sample times, one RK4 step per interval
   (``integrator="rk4"``) or Euler with 1 ms internal steps (``"euler"``).
 
@@ -35,6 +41,9 @@ unaffected.
 """
 import numpy as np
 from movement_primitives.dmp import DMP
+# private helpers of DMP.imitate, stable in the pinned movement_primitives==0.9.1
+# (requirements/python.txt)
+from movement_primitives.dmp._dmp import determine_forces, ridge_regression
 from sklearn.base import BaseEstimator
 
 from . import _validation as check
@@ -58,6 +67,19 @@ def _as_times(times, name, minimum):
     if (np.diff(times) <= 0).any():
         raise ValueError(f"{name} must be strictly increasing")
     return times
+
+
+def _as_demonstration(times, Q, k=None):
+    """Check one demonstration; ``k`` is its index in ``fit_many`` (named in the errors)."""
+    t_name, q_name = ("times", "Q") if k is None else (f"times_list[{k}]", f"Q_list[{k}]")
+    Q = check.as_matrix(Q, q_name)
+    if len(Q) < 3:
+        raise ValueError(f"{q_name} must have at least 3 samples (rows) for the finite "
+                         f"differences, got {len(Q)}")
+    times = _as_times(times, t_name, minimum=3)
+    if len(Q) != len(times):
+        raise ValueError(f"{q_name} has {len(Q)} rows but {t_name} has {len(times)} samples")
+    return times, Q
 
 
 def _as_vector(value, name, n):
@@ -84,10 +106,13 @@ class JointDMP(BaseEstimator):
     Learned attributes
     ------------------
     weights_ : (d, N) the w_i of every joint
-    start_, goal_ : (d,) q_0 and q_g, the first and last configurations of the demonstration
-    tau_ : τ, the demonstration's duration (s)
-    times_ : (T,) the demonstration's sample times, shifted to start at 0
+    start_, goal_ : (d,) q_0 and q_g, the first and last configurations of the (first)
+        demonstration
+    tau_ : τ, the demonstration's duration (s); with ``fit_many`` the mean duration
+    times_ : (T,) the (first) demonstration's sample times, shifted to start at 0 (and
+        rescaled to span [0, τ])
     n_features_in_ : d
+    n_demonstrations_ : the number of demonstrations fitted
     """
 
     def __init__(self, n_weights_per_dim=30, alpha_z=25.0, beta_z=None, regularization=0.0,
@@ -113,28 +138,51 @@ class JointDMP(BaseEstimator):
 
     def fit(self, times, Q):
         """Learn the DMP from one joint trajectory ``Q`` (T, d) sampled at ``times`` (T,) s."""
-        Q = check.as_matrix(Q, "Q")
-        if len(Q) < 3:
-            raise ValueError(f"Q must have at least 3 samples (rows) for the finite "
-                             f"differences, got {len(Q)}")
-        times = _as_times(times, "times", minimum=3)
-        if len(Q) != len(times):
-            raise ValueError(f"Q has {len(Q)} rows but times has {len(times)} samples")
-        times = times - times[0]
-        dmp = self._library_dmp(Q.shape[1], times[-1])
-        dmp.imitate(times, Q, regularization_coefficient=float(self.regularization))
-        self.weights_ = dmp.forcing_term.weights_.copy()
-        self.start_, self.goal_ = Q[0].copy(), Q[-1].copy()
-        self.tau_ = float(times[-1])
-        self.times_ = times
-        self.n_features_in_ = Q.shape[1]
+        return self._fit([_as_demonstration(times, Q)])
+
+    def fit_many(self, times_list, Q_list):
+        """Learn one DMP from several demonstrations (thesis §4.5.2; module docstring).
+
+        ``Q_list[k]`` (T_k, d) is sampled at ``times_list[k]`` (T_k,) s; T_k and the durations
+        may differ. start_, goal_ and times_ are the first demonstration's.
+        """
+        times_list, Q_list = list(times_list), list(Q_list)
+        if len(times_list) != len(Q_list):
+            raise ValueError(f"times_list has {len(times_list)} demonstrations but Q_list has "
+                             f"{len(Q_list)}")
+        if not Q_list:
+            raise ValueError("fit_many needs at least one demonstration")
+        demos = [_as_demonstration(t, Q, k) for k, (t, Q) in enumerate(zip(times_list, Q_list))]
+        for k, (_, Q) in enumerate(demos):
+            if Q.shape[1] != demos[0][1].shape[1]:
+                raise ValueError(f"Q_list[{k}] has {Q.shape[1]} joints (columns) but Q_list[0] "
+                                 f"has {demos[0][1].shape[1]}")
+        return self._fit(demos)
+
+    def _fit(self, demos):
+        """Ridge regression of eq. 4.4's weights on the stacked samples of checked demos."""
+        tau = float(np.mean([t[-1] - t[0] for t, _ in demos]))
+        dmp = self._library_dmp(demos[0][1].shape[1], tau)
+        term = dmp.forcing_term
+        # each demonstration on [0, τ], so the phases line up (its targets and features are
+        # invariant to this up to rounding: the library computes them in units of its duration)
+        rescaled = [(t - t[0]) * (tau / (t[-1] - t[0])) for t, _ in demos]
+        X = [term.design_matrix(t) for t in rescaled]                         # (N, T_k)
+        F = [determine_forces(t, Q, dmp.alpha_y, dmp.beta_y, term.alpha_z,
+                              allow_final_velocity=False, smooth_scaling=dmp.smooth_scaling)[0]
+             for t, (_, Q) in zip(rescaled, demos)]                           # (T_k, d)
+        self.weights_ = ridge_regression(np.hstack(X), np.vstack(F), float(self.regularization))
+        self.start_, self.goal_ = demos[0][1][0].copy(), demos[0][1][-1].copy()
+        self.tau_, self.times_ = tau, rescaled[0]
+        self.n_features_in_ = demos[0][1].shape[1]
+        self.n_demonstrations_ = len(demos)
         return self
 
     def reproduce(self, times=None, start=None, goal=None):
-        """Integrate the DMP from ``start`` towards ``goal`` (default: the demonstration's).
+        """Integrate the DMP from ``start`` to ``goal`` (default: the first demonstration's).
 
         ``times`` (T,) are the sample times in s, the movement starting at ``times[0]``; they
-        may run past τ. Default: the demonstration's. Returns Q (T, d), Q[0] = start.
+        may run past τ. Default: the first demonstration's. Returns Q (T, d), Q[0] = start.
         """
         check.check_fitted(self, "weights_")
         d = self.n_features_in_
