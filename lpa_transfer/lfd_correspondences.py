@@ -124,6 +124,19 @@ class JointMap:
                              f"{limits.shape}")
         return np.sort(self.sign[:, None] * limits[self.index] + self.offset[:, None], axis=1)
 
+    @classmethod
+    def between(cls, teacher, learner):
+        """The map from a teacher robot's joints to a learner robot's, both given by their
+        maps from one demonstrator (§4.4.5: the PR2 teaches the Meka what the human taught
+        it): q_L = learner.to_robot(teacher.to_demonstrator(q_T)), itself a joint map."""
+        if teacher.n_joints != learner.n_joints:
+            raise ValueError(f"the teacher's map has {teacher.n_joints} joints, the "
+                             f"learner's {learner.n_joints}")
+        where = np.argsort(teacher.index)       # teacher joint that follows demonstrator i
+        index = where[learner.index]
+        sign = learner.sign * teacher.sign[index]
+        return cls(index, sign, learner.offset - sign * teacher.offset[index])
+
     def __repr__(self):
         return f"JointMap.from_spec({self.to_spec()!r})"
 
@@ -173,6 +186,14 @@ class TaskFrame:
     def to_demonstrator(self, x_robot):
         """Demonstrator task points (N, 3) for robot points (N, 3): (T_R^H)⁻¹ x_R."""
         return (self._points(x_robot, "x_robot") - self.translation) @ self.rotation
+
+    @classmethod
+    def between(cls, teacher, learner):
+        """The task frame from a teacher robot to a learner robot, both placed relative to
+        one demonstrator (T_learner^teacher of §4.5.3): x_L = R_L R_Tᵀ (x_T − t_T) + t_L, so
+        a demonstrated point lands where the learner's own frame puts it."""
+        rotation = learner.rotation @ teacher.rotation.T
+        return cls(learner.translation - rotation @ teacher.translation, rotation)
 
     def __repr__(self):
         return f"TaskFrame({self.translation.tolist()}, {self.rotation.tolist()})"

@@ -8,10 +8,10 @@ demonstrator to a robot by LPA, and the mapping error (thesis §4.5, §4.5.1; no
   human kinematic model to trace the letters and obtained the tasks in joint space", §4.5).
   The demonstrations of one shape share one placement, so their differences stay those the
   writer made.
-* Mapping error (:func:`mapping_errors`, Fig. 4-10): LPA fitted on a growing number of
-  correspondences (motor babbling on the robot, §4.4.2) for several N_min, every
-  demonstration transferred point by point (Alg. 4) and the mapped robot joints executed
-  (forward kinematics) against the task point they should reach, T_R^H x_H.
+* Correspondences to a count (:func:`collect_pairs`, motor babbling on the robot, §4.4.2)
+  and the mapping error (:func:`executed_errors`): transferred robot joints executed
+  (forward kinematics) against the task point they should reach, T_R^H x_H. The sweeps of
+  Fig. 4-10/4-12 are in :mod:`lpa_transfer.lfd_skills`.
 """
 from pathlib import Path
 from typing import NamedTuple
@@ -24,7 +24,6 @@ from .demonstrations import letter_layout, load_lasa, place_in_task_space
 from .inverse_kinematics import solve_path
 from .lfd_correspondences import (JointMap, TaskFrame, arm_kinematics,
                                   collect_correspondences)
-from .local_procrustes import LocalProcrustesAnalysis
 from .robot_params import load_robot_params
 
 #: Babbling batches :func:`collect_pairs` may draw before it gives up on a robot that the
@@ -140,29 +139,3 @@ def executed_errors(learner, mapped_rows, x_demonstrator):
     forward = arm_kinematics(learner.robot, n, name="robot").forward
     x_target = learner.task_frame.to_robot(x_demonstrator)
     return np.linalg.norm(forward(np.asarray(mapped_rows)[:, :n]) - x_target, axis=1)
-
-
-def mapping_errors(learner, demonstrator, demos, sizes, n_mins, seeds, c_min=1e-7,
-                   random_state=0):
-    """Fig. 4-10: the mean mapping error (m) over every point of ``demos`` for each seed,
-    N_min and training size: an array (len(seeds), len(n_mins), len(sizes)).
-
-    Per seed the correspondences are collected once (:func:`collect_pairs`, max(sizes)
-    pairs) and each size uses its first pairs, so a curve shows more data, not other data.
-    LPA: ``c_min``, ``n_min``, the mixture in the demonstrator's (q, x) space, latent_dim
-    the full 7-D (§4.4.3).
-    """
-    for size in sizes:
-        check.check_int(size, "training size", minimum=1)
-    rows = np.vstack([d.rows for d in demos])
-    x_demo = np.vstack([d.x for d in demos])
-    errors = np.empty((len(seeds), len(n_mins), len(sizes)))
-    for i, seed in enumerate(seeds):
-        demo_pairs, robot_pairs, _ = collect_pairs(learner, demonstrator, max(sizes), seed)
-        for j, n_min in enumerate(n_mins):
-            for k, size in enumerate(sizes):
-                lpa = LocalProcrustesAnalysis(n_min=n_min, c_min=c_min,
-                                              random_state=random_state)
-                lpa.fit(demo_pairs[:size], robot_pairs[:size])
-                errors[i, j, k] = executed_errors(learner, lpa.transfer(rows), x_demo).mean()
-    return errors

@@ -212,6 +212,31 @@ def test_babbling_limits_share_the_demonstrators_range(human):
         joint_map.robot_range(np.zeros((3, 2)))
 
 
+def test_maps_and_frames_between_two_robots_compose_through_the_demonstrator():
+    """PR2 -> Meka (§4.5.3): carrying PR2 joints to the human and on to the Meka is the map
+    `between` builds; a human point reaches the Meka at the same place directly or via the
+    PR2's frame."""
+    _, to_pr2, pr2_frame = setup("pr2_right_arm")
+    _, to_meka, meka_frame = setup("meka_right_arm")
+    pr2_to_meka = JointMap.between(to_pr2, to_meka)
+    q_pr2 = np.random.default_rng(0).uniform(-2, 2, (20, 4))
+    np.testing.assert_allclose(pr2_to_meka.to_robot(q_pr2),
+                               to_meka.to_robot(to_pr2.to_demonstrator(q_pr2)), atol=1e-12)
+    np.testing.assert_allclose(pr2_to_meka.to_demonstrator(pr2_to_meka.to_robot(q_pr2)),
+                               q_pr2, atol=1e-12)
+    # Table 4.2: Meka J2 = -human J2 = -(PR2 J1); Meka J3 = J3 + pi/2 = PR2 J3
+    assert pr2_to_meka.to_spec()[1] == {"joint": 0, "sign": -1, "offset": 0.0}
+    assert pr2_to_meka.to_spec()[2] == {"joint": 2, "sign": 1, "offset": 0.0}
+    tilted = TaskFrame([0.1, 0.2, 0.3], [0.1, -0.2, 0.3])
+    for teacher in (pr2_frame, tilted):
+        frame = TaskFrame.between(teacher, meka_frame)
+        x_human = np.random.default_rng(1).uniform(-0.5, 0.5, (10, 3))
+        np.testing.assert_allclose(frame.to_robot(teacher.to_robot(x_human)),
+                                   meka_frame.to_robot(x_human), atol=1e-12)
+    with pytest.raises(ValueError, match="joints"):
+        JointMap.between(to_pr2, JointMap([0, 1], [1, 1], [0, 0]))
+
+
 def test_bad_input_raises(human, meka):
     robot, joint_map, frame = meka
     for kwargs in (dict(n=0), dict(n=2.5), dict(seed=-1), dict(ik_tolerance=0.0),

@@ -1,5 +1,6 @@
-"""Chapter 4's in-process experiment (thesis §4.5.1): lpa_transfer.lfd_experiment and the
-Fig. 4-10 script scenarios/lfd/mapping_accuracy.py on its smoke configuration."""
+"""Chapter 4's in-process experiment (thesis §4.5): lpa_transfer.lfd_experiment (the
+scenario, demonstrations, correspondences, mapping error) and scenarios/lfd/accuracy.py on its
+smoke configuration; the sweeps and skills are in test_lfd_skills.py."""
 import csv
 import subprocess
 import sys
@@ -12,7 +13,7 @@ from conftest import ROOT
 from lpa_transfer.inverse_kinematics import solve_many
 from lpa_transfer.lfd_correspondences import arm_kinematics
 from lpa_transfer.lfd_experiment import (collect_pairs, demonstrations, executed_errors,
-                                         load_setup, mapping_errors)
+                                         load_setup)
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "config.yaml").read_text())[
     "experiment"]["ros__parameters"]
@@ -85,24 +86,24 @@ def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):
     assert executed_errors(learner, rows, demos[0].x).min() > 0.005
 
 
-def test_mapping_error_falls_with_more_correspondences(setup, demos):
-    """Fig. 4-10's trend on the Meka: 1500 pairs map the letters better than 200 for both
-    N_min (measured: N_min 10 20.0 -> 6.4 mm, N_min 15 17.7 -> 10.1 mm)."""
-    errors = mapping_errors(setup.learners["meka_right_arm"], setup.demonstrator, demos,
-                            [200, 1500], [10, 15], [0])
-    assert errors.shape == (1, 2, 2)
-    assert (errors[0, :, 1] < 0.75 * errors[0, :, 0]).all()
-    assert errors[0, :, 1].max() < 0.03
-
-
-def test_mapping_accuracy_script_writes_its_table_and_figure(tmp_path):
-    out = tmp_path / "run"
-    subprocess.run([sys.executable, str(ROOT / "scenarios" / "lfd" / "mapping_accuracy.py"),
-                    "--override", str(ROOT / "scenarios" / "lfd" / "smoke.yaml"),
-                    "--out", str(out)], check=True, timeout=600)
-    rows = list(csv.DictReader(open(out / "mapping_errors.csv")))
+def test_accuracy_script_writes_its_tables_and_figure(tmp_path):
+    """The smoke size end to end; the same config gives the same numbers."""
+    outputs = []
+    for name in ("run", "again"):
+        out = tmp_path / name
+        subprocess.run([sys.executable, str(ROOT / "scenarios" / "lfd" / "accuracy.py"),
+                        "--override", str(ROOT / "scenarios" / "lfd" / "smoke.yaml"),
+                        "--out", str(out)], check=True, timeout=900)
+        outputs.append(out)
+    rows = list(csv.DictReader(open(outputs[0] / "sweep.csv")))
     assert len(rows) == 2 * 2 * 2                   # robots x N_min x sizes, one seed
-    assert all(0 < float(r["mapping_error_mm"]) < 500 for r in rows)
-    report = (out / "report.txt").read_text()
+    assert all(0 < float(r[k]) < 500 for r in rows
+               for k in ("mapping_error_mm", "encoding_error_mm"))
+    table = list(csv.DictReader(open(outputs[0] / "multi_robot.csv")))
+    assert [r["condition"] for r in table] == ["direct", "refined", "unrefined"]
+    report = (outputs[0] / "report.txt").read_text()
     assert "pr2_right_arm: lowest mean" in report and "meka_right_arm: lowest mean" in report
-    assert (out / "fig4_10_mapping_accuracy.png").stat().st_size > 10_000
+    assert "Table 4.3" in report and "IK method" in report
+    assert (outputs[0] / "fig4_10_12_accuracy.png").stat().st_size > 10_000
+    for name in ("sweep.csv", "multi_robot.csv"):
+        assert (outputs[0] / name).read_text() == (outputs[1] / name).read_text()
