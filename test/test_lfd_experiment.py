@@ -16,7 +16,7 @@ from lpa_transfer.lfd_experiment import (collect_pairs, demonstrations, executed
                                          load_setup)
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "config.yaml").read_text())[
-    "experiment"]["ros__parameters"]
+    "/**"]["ros__parameters"]
 BOX = (CONFIG["task_box_low"], CONFIG["task_box_high"])
 
 

@@ -13,7 +13,7 @@ from lpa_transfer.lfd_skills import (CONDITIONS, accuracy_sweep, between, by_sha
                                      robot_ik_demonstrations)
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "config.yaml").read_text())[
-    "experiment"]["ros__parameters"]
+    "/**"]["ros__parameters"]
 
 
 @pytest.fixture(scope="module")

@@ -42,11 +42,13 @@ THESIS_TABLE = {"direct": ((0.0045, 0.0008), (0.0140, 0.0013)),
 
 
 def read_config(paths):
-    """The experiment's parameters: later files override earlier ones."""
+    """The experiment's parameters, the "/**" section's and the "experiment" section's (as
+    the node graph's ``experiment`` node sees them); later files override earlier ones."""
     params = {}
     for path in paths:
-        params.update((yaml.safe_load(Path(path).read_text()) or {})
-                      .get("experiment", {}).get("ros__parameters", {}))
+        sections = yaml.safe_load(Path(path).read_text()) or {}
+        for key in ("/**", "experiment"):
+            params.update((sections.get(key) or {}).get("ros__parameters", {}))
     return params
 
 

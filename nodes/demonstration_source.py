@@ -1,0 +1,76 @@
+"""demonstration_source: the demonstrator's letters as joint trajectories (thesis §4.5, Fig. 4-9).
+
+Run: ``demonstration_source --ros-args --params-file scenarios/lfd/config.yaml`` (or
+``python -m lpa_transfer_nodes.demonstration_source ...``).
+
+The node makes the demonstrations once at start (:func:`lpa_transfer.lfd_experiment.
+demonstrations`: LASA shapes placed in a box of the demonstrator's task space and traced with
+its IK) and publishes each on ``demonstrations`` (lpa_transfer_interfaces/msg/Demonstration),
+reliable and transient local with a queue of all of them, so a subscriber that joins later
+(the experiment, the recorder) still receives every one. It then keeps serving them until
+SIGINT/SIGTERM.
+
+Parameters: ``frames`` (the scenario's frames file: its ``demonstrator`` is the body that
+demonstrates), ``shapes`` (LASA shape names), ``n_demos`` (per shape, 5), ``n_samples`` (per
+demonstration, 100), ``task_box_low`` / ``task_box_high`` (m, the demonstrator's world frame),
+``layout_seed`` (0), ``n_joints`` (4: the demonstrator's joints that move). A shape the
+demonstrator cannot trace, or a bad parameter, stops the node at start with the reason.
+"""
+import os
+import time
+
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+from lpa_transfer.lfd_experiment import demonstrations, load_setup
+from lpa_transfer_interfaces.msg import Demonstration
+from lpa_transfer_nodes._ros_util import serve, to_matrix
+
+
+def demonstration_qos(count):
+    """Reliable, transient local, deep enough for ``count`` demonstrations."""
+    return QoSProfile(depth=max(1, count), reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def demonstration_msg(body, demo, index, n_demos, stamp):
+    """A :class:`lpa_transfer.lfd_experiment.Demonstration` as a message."""
+    msg = Demonstration(body=body, shape=demo.shape, index=index, n_demos=n_demos,
+                        times=[float(t) for t in demo.times], joints=to_matrix(demo.q),
+                        points=to_matrix(demo.x))
+    msg.header.stamp, msg.header.frame_id = stamp, "world"
+    return msg
+
+
+class DemonstrationSource(Node):
+    def __init__(self):
+        super().__init__("demonstration_source")
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        frames = os.path.expanduser(declare("frames", ""))
+        if not frames:
+            raise ValueError("parameter 'frames' (the scenario's frames file) is required")
+        demonstrator = load_setup(frames, os.getcwd()).demonstrator
+        shapes = list(declare("shapes", ["LShape"]))
+        n_demos = int(declare("n_demos", 5))
+        box = (list(declare("task_box_low", [0.0])), list(declare("task_box_high", [0.0])))
+        started = time.perf_counter()
+        demos = demonstrations(demonstrator, shapes, box, seed=int(declare("layout_seed", 0)),
+                               n_demos=n_demos, n_samples=int(declare("n_samples", 100)),
+                               n_joints=int(declare("n_joints", 4)))
+        publisher = self.create_publisher(Demonstration, "demonstrations",
+                                          demonstration_qos(len(demos)))
+        stamp = self.get_clock().now().to_msg()
+        for k, demo in enumerate(demos):
+            publisher.publish(demonstration_msg(demonstrator.name, demo, k % n_demos, n_demos,
+                                                stamp))
+        self.get_logger().info(
+            f"published {len(demos)} demonstrations by {demonstrator.name} ({len(shapes)} "
+            f"shapes x {n_demos}, traced in {time.perf_counter() - started:.1f} s)")
+
+
+def main(args=None):
+    serve("demonstration_source", lambda stop: DemonstrationSource(), args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,140 @@
+"""skill_learner: learn a skill (joint-space DMP), execute it on a robot (thesis §4.4.4, §4.5.2).
+
+Run (next to a robot_sim in position mode, lock-step, in the same namespace):
+``skill_learner --ros-args -r __ns:=/meka -p robot:=scenarios/robots/meka_right_arm.toml``
+(or ``python -m lpa_transfer_nodes.skill_learner ...``).
+
+Each LearnSkill call fits one :class:`lpa_transfer.dmp.JointDMP` (eq. 4.1-4.5) on a shape's
+demonstrations in this robot's joint space (transferred by LPA, or traced by its own IK),
+reproduces the first demonstration with it (§4.5.2: "reproduce the first demonstration") and
+executes that reproduction on the robot's simulator: a reset to its first pose, then each
+sample commanded in position mode for the physics steps of its time interval. Poses are
+clipped into the joint limits first (as position mode clips its targets; a reset outside them
+would be refused), so a reproduction that leaves the limits shows in the reported distance.
+
+Parameters:
+
+* ``robot``: the robot parameter file; ``n_joints`` (4): the DMP drives the robot's first n
+  joints, the others are held at the robot's home (zero clipped into the limits).
+* ``dmp_weights_per_joint`` (30) and ``dmp_alpha_z`` (25.0): the DMP's N and α_z.
+* ``physics_step`` (s, 0.001, the simulator's): sample k is commanded for
+  round((t_k − t_{k−1}) / physics_step) + ``settle_steps`` physics steps (at least 1).
+* ``settle_steps`` (0): extra physics steps after each command before the end effector is
+  read. The position motors lag their targets, so the executed points trail the reproduction's
+  forward kinematics; settling shrinks that lag but stretches the executed motion in time.
+* ``step_service`` and ``reset_service`` (default ``robot_sim/step``, ``robot_sim/reset``,
+  resolved in the node's namespace); ``call_timeout`` (s, 30) for each robot call;
+  ``wait_timeout`` (s, 30) for the robot.
+
+Service: ``~/learn_skill`` (LearnSkill). A bad request (no demonstrations, a joints matrix
+without n_joints columns, fewer than 3 samples, NaN/inf, times not increasing or not one per
+sample) is answered with ``success=false`` and the reason; the node keeps serving.
+Topic: ``skill_reproduction`` (SkillReproduction, one per learned skill: stamp = the simulated
+time at the end of the execution).
+"""
+import os
+
+import numpy as np
+from rclpy.node import Node
+
+from lpa_transfer.dmp import JointDMP
+from lpa_transfer.guided_exploration import pad_transferred
+from lpa_transfer.kinematics import home_pose
+from lpa_transfer.lfd_correspondences import arm_kinematics
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer_interfaces.msg import SkillReproduction
+from lpa_transfer_interfaces.srv import LearnSkill
+from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, from_matrix,
+                                          robot_resetter, robot_stepper, serve, sim_stamp,
+                                          to_matrix, wait_for_services)
+
+
+class SkillLearner(Node):
+    def __init__(self, stop):
+        super().__init__("skill_learner")
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        self.stop = stop
+        self.robot = load_robot_params(os.path.expanduser(declare("robot", "")))
+        self.n_joints = int(declare("n_joints", 4))
+        self.kinematics = arm_kinematics(self.robot, self.n_joints, name=self.robot.name)
+        self.home = home_pose(self.robot.joint_limits)
+        self.dmp = JointDMP(n_weights_per_dim=int(declare("dmp_weights_per_joint", 30)),
+                            alpha_z=float(declare("dmp_alpha_z", 25.0)))
+        self.physics_step = float(declare("physics_step", 0.001))
+        self.settle_steps = int(declare("settle_steps", 0))
+        if not self.physics_step > 0 or self.settle_steps < 0:
+            raise ValueError(f"physics_step must be > 0 and settle_steps >= 0, got "
+                             f"{self.physics_step} and {self.settle_steps}")
+        self.call_timeout = float(declare("call_timeout", 30.0))
+        self.wait_timeout = float(declare("wait_timeout", 30.0))
+        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
+                                          declare("reset_service", "robot_sim/reset"))
+        self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
+        self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
+                                             self.robot.name)
+        self.publisher = self.create_publisher(SkillReproduction, "skill_reproduction", 10)
+        self.create_service(LearnSkill, "~/learn_skill",
+                            answering(self, "learn_skill", self.learn_skill))
+        step_service = self.robot_clients.node.resolve_service_name(
+            self.robot_clients.step.srv_name)
+        self.get_logger().info(
+            f"{self.robot.name}: DMP (N={self.dmp.n_weights_per_dim}, alpha_z="
+            f"{self.dmp.alpha_z:g}) on joints 0..{self.n_joints - 1}, the other "
+            f"{self.robot.n_joints - self.n_joints} held at {self.home[self.n_joints:].tolist()}; "
+            f"executed on {step_service} (settle_steps {self.settle_steps})")
+
+    def call(self, client, request):
+        return call_service(self.robot_clients.executor, client, request, self.call_timeout)
+
+    def demonstrations(self, request):
+        """The requests' (times list, joints list), the column count checked."""
+        if not request.demonstrations:
+            raise ValueError("no demonstrations: LearnSkill needs at least one")
+        times, joints = [], []
+        for k, demo in enumerate(request.demonstrations):
+            q = from_matrix(demo.joints, f"demonstrations[{k}].joints")
+            if q.shape[1] != self.n_joints:
+                raise ValueError(f"demonstrations[{k}].joints has {q.shape[1]} columns, the "
+                                 f"{self.robot.name} learner drives {self.n_joints} joints")
+            times.append(np.array(demo.times))
+            joints.append(q)
+        return times, joints
+
+    def learn_skill(self, request, response):
+        times, joints = self.demonstrations(request)
+        self.dmp.fit_many(times, joints)
+        reproduced, t = self.dmp.reproduce(), self.dmp.times_
+        wait_for_services([self.robot_clients.step, self.robot_clients.reset],
+                          self.wait_timeout, self.stop)
+        limits = np.asarray(self.robot.joint_limits, dtype=np.float64)
+        commands = np.clip(pad_transferred(reproduced, self.home, np.arange(self.n_joints)),
+                           limits[:, 0], limits[:, 1])
+        state = self.reset_robot_to(commands[0])
+        points = [state.end_effector]
+        for k in range(1, len(t)):
+            n_steps = max(1, round((t[k] - t[k - 1]) / self.physics_step) + self.settle_steps)
+            state = self.step(commands[k], n_steps)
+            points.append(state.end_effector)
+        points = np.array(points, dtype=np.float64)
+        msg = SkillReproduction(robot=self.robot.name, shape=request.shape,
+                                n_demonstrations=len(joints), times=[float(x) for x in t],
+                                reproduced_joints=to_matrix(reproduced),
+                                executed_points=to_matrix(points))
+        msg.header.stamp, msg.header.frame_id = sim_stamp(state.time), "world"
+        self.publisher.publish(msg)
+        response.reproduction = msg
+        distance = np.linalg.norm(points - self.kinematics.forward(reproduced), axis=1).mean()
+        return (f"{request.shape}: DMP on {len(joints)} demonstrations, executed {len(t)} "
+                f"samples, mean distance to the reproduction's FK {1e3 * distance:.1f} mm")
+
+    def destroy_node(self):
+        self.robot_clients.destroy()
+        super().destroy_node()
+
+
+def main(args=None):
+    serve("skill_learner", SkillLearner, args)
+
+
+if __name__ == "__main__":
+    main()

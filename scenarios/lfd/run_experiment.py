@@ -1,0 +1,209 @@
+#!/usr/bin/env python3
+"""Thesis §4.5.1-4.5.2 over the node graph: letters demonstrated by the human arm model,
+transferred by LPA onto the PR2 and the Meka, encoded as DMPs and executed on their simulators.
+
+Part of run.sh, as the ROS node ``experiment`` (parameters: scenarios/lfd/config.yaml).
+Running: ``demonstration_source`` (the human's demonstrations on ``demonstrations``),
+``lpa_mapping``, per robot a ``robot_sim`` in position mode and a ``skill_learner`` (namespace
+= the robot's name in frames.yaml), and the recorder. For every robot:
+
+1. Correspondences (§4.4.2): motor babbling on the robot and the human's IK, in process
+   (:func:`lpa_transfer.lfd_experiment.collect_pairs`: forward kinematics, as the thesis'
+   "simulated motor babbling"), ``graph_pairs`` of them with seed ``graph_seed``.
+2. ``/lpa_mapping/fit``: an LPA (``graph_n_min``, ``c_min``) human -> robot on them.
+3. ``/lpa_mapping/transfer``: every demonstration, whole, onto the robot (Alg. 4).
+4. ``/<robot>/skill_learner/learn_skill``: per shape, one DMP on its transferred
+   demonstrations, the first reproduced and executed on the simulated robot. The same with
+   the robot's own IK trajectories: the thesis' "IK method".
+
+Errors (m, against where the robot's task frame puts the demonstrated points, T_R^H x_H):
+mapping (the transferred joints' forward kinematics, every point) and encoding (the executed
+reproduction's end effector, each shape's first demonstration). Writes into ``output_dir``:
+``results.json``, ``report.txt`` and ``fig4_11_13_letters.png`` (demonstrations, transferred
+and reproduced letters in 3-D, like Fig. 4-11/4-13).
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+
+from lpa_transfer.lfd_correspondences import arm_kinematics  # noqa: E402
+from lpa_transfer.lfd_experiment import (Demonstration, collect_pairs,  # noqa: E402
+                                         executed_errors, load_setup)
+from lpa_transfer.lfd_skills import by_shape, robot_ik_demonstrations  # noqa: E402
+from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
+from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
+from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
+                                          from_matrix, run_job, to_matrix)
+from lpa_transfer_nodes.demonstration_source import (demonstration_msg,  # noqa: E402
+                                                     demonstration_qos)
+
+METHODS = ("transferred", "ik_method")
+
+
+class Experiment(Node):
+    def __init__(self, stop):
+        super().__init__("experiment")
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        self.stop = stop
+        self.setup = load_setup(declare("frames", ""), Path.cwd())
+        self.n_expected = len(declare("shapes", ["LShape"])) * int(declare("n_demos", 5))
+        self.pairs = int(declare("graph_pairs", 20000))
+        self.seed = int(declare("graph_seed", 0))
+        self.fit = dict(method="lpa", n_min=int(declare("graph_n_min", 12)),
+                        c_min=float(declare("c_min", 1e-7)), latent_dim=0, random_state=0)
+        self.output_dir = Path(declare("output_dir", "."))
+        self.wait_timeout = float(declare("wait_timeout", 120.0))
+        self.received = {}
+        self.create_subscription(DemonstrationMsg, "demonstrations", self.on_demonstration,
+                                 demonstration_qos(self.n_expected))
+        self.spinner = SingleThreadedExecutor()
+        self.spinner.add_node(self)
+        self.calls = ServiceCalls(self, self.spinner, float(declare("call_timeout", 600.0)),
+                                  stop)
+
+    def on_demonstration(self, msg):
+        self.received[(msg.shape, msg.index)] = Demonstration(
+            msg.shape, np.array(msg.times), from_matrix(msg.joints, "joints"),
+            from_matrix(msg.points, "points"))
+
+    def demonstrations(self):
+        """Every demonstration, in the source's order (shape by shape), once all arrived."""
+        deadline = time.monotonic() + self.wait_timeout
+        while len(self.received) < self.n_expected:
+            if self.stop.is_set() or time.monotonic() > deadline:
+                raise ServiceTimeout(f"received {len(self.received)} of {self.n_expected} "
+                                     f"demonstrations (is demonstration_source running?)")
+            self.spinner.spin_once(timeout_sec=0.1)
+        shapes = list(dict.fromkeys(shape for shape, _ in self.received))   # arrival order
+        return [self.received[key] for key in
+                sorted(self.received, key=lambda key: (shapes.index(key[0]), key[1]))]
+
+    def learn_skills(self, name, demos, joints):
+        """Per shape: the skill node's DMP on these joint trajectories, executed. Returns
+        {shape: executed end-effector points (T, 3) of its first demonstration}."""
+        executed = {}
+        for shape, members in by_shape(demos).items():
+            request = [demonstration_msg(name, Demonstration(shape, demos[i].times, joints[i],
+                                                             demos[i].x), k, len(members),
+                                         self.get_clock().now().to_msg())
+                       for k, i in enumerate(members)]
+            answer = self.calls.call(LearnSkill, f"/{name}/skill_learner/learn_skill",
+                                     shape=shape, demonstrations=request)
+            executed[shape] = from_matrix(answer.reproduction.executed_points, "points")
+        return executed
+
+    def robot(self, name, demos):
+        learner = self.setup.learners[name]
+        started = time.perf_counter()
+        source, target, tried = collect_pairs(learner, self.setup.demonstrator, self.pairs,
+                                              self.seed)
+        model_id = f"{self.setup.demonstrator.name}->{name}"
+        fitted = self.calls.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
+                                 source=to_matrix(source), target=to_matrix(target), **self.fit)
+        mapped = [from_matrix(self.calls.call(TransferPoints, "/lpa_mapping/transfer",
+                                              model_id=model_id,
+                                              source=to_matrix(d.rows)).target, "target")
+                  for d in demos]
+        n = learner.joint_map.n_joints
+        joints = {"transferred": [m[:, :n] for m in mapped],
+                  "ik_method": [d.q for d in robot_ik_demonstrations(learner, demos)]}
+        result = {"pairs": self.pairs, "babbled": tried, "clusters": fitted.n_clusters,
+                  "mapping_error": float(np.mean([executed_errors(learner, m, d.x).mean()
+                                                  for m, d in zip(mapped, demos)]))}
+        firsts = {shape: members[0] for shape, members in by_shape(demos).items()}
+        forward = arm_kinematics(learner.robot, n).forward
+        traces = {"demonstrated": {s: learner.task_frame.to_robot(demos[i].x)
+                                   for s, i in firsts.items()},
+                  "mapped": {s: forward(joints["transferred"][i]) for s, i in firsts.items()}}
+        for method in METHODS:
+            executed = self.learn_skills(name, demos, joints[method])
+            errors = {shape: float(np.linalg.norm(
+                executed[shape] - traces["demonstrated"][shape], axis=1).mean())
+                for shape in firsts}
+            result[f"{method}_encoding_error"] = float(np.mean(list(errors.values())))
+            result[f"{method}_encoding_by_shape"] = errors
+            traces[method] = executed
+        self.get_logger().info(
+            f"{name}: mapping {result['mapping_error'] * 1e3:.1f} mm, encoding "
+            f"{result['transferred_encoding_error'] * 1e3:.1f} mm (IK method "
+            f"{result['ik_method_encoding_error'] * 1e3:.1f} mm), "
+            f"{time.perf_counter() - started:.0f} s")
+        return result, traces
+
+    def run(self):
+        demos = self.demonstrations()
+        results, traces = {}, {}
+        for name in self.setup.learners:
+            results[name], traces[name] = self.robot(name, demos)
+        self.output_dir.mkdir(parents=True, exist_ok=True)
+        (self.output_dir / "results.json").write_text(json.dumps(results, indent=1))
+        (self.output_dir / "report.txt").write_text(report(results, len(demos)))
+        plot(self.output_dir / "fig4_11_13_letters.png", self.setup, demos, traces)
+        return results
+
+
+THESIS = ("thesis §4.5.1-4.5.2: mapping errors on average below 0.01 m (Fig. 4-10); encoding "
+          "errors comparable with the IK method's (Fig. 4-12); Table 4.3 (human -> Meka): "
+          "mapping 4.5 mm, encoding 14.0 mm")
+
+
+def report(results, n_demos):
+    lines = [f"Thesis §4.5 over the node graph: {n_demos} demonstrations by the human, mapped "
+             f"by lpa_mapping and encoded and executed by each robot's skill_learner on its "
+             f"robot_sim (mm; mapping: every point, encoding: each shape's first "
+             f"demonstration as executed)", "",
+             f"{'robot':18s}{'pairs':>8s}{'clusters':>10s}{'mapping':>10s}{'encoding':>10s}"
+             f"{'IK method':>11s}"]
+    for name, r in results.items():
+        lines.append(f"{name:18s}{r['pairs']:8d}{r['clusters']:10d}"
+                     f"{r['mapping_error'] * 1e3:10.1f}"
+                     f"{r['transferred_encoding_error'] * 1e3:10.1f}"
+                     f"{r['ik_method_encoding_error'] * 1e3:11.1f}")
+    return "\n".join(lines + ["", THESIS]) + "\n"
+
+
+STYLES = {"demonstrated": dict(color="tab:red", lw=2.5, label="demonstration (T_R^H x_H)"),
+          "mapped": dict(color="tab:green", lw=1.2, label="transferred (FK of LPA joints)"),
+          "transferred": dict(color="tab:blue", lw=1.2, ls="--",
+                              label="DMP of transferred, executed"),
+          "ik_method": dict(color="black", lw=0.8, ls=":", label="DMP of own IK, executed")}
+
+
+def plot(path, setup, demos, traces):
+    """Fig. 4-11/4-13 like: per robot, every shape's first demonstration in the robot's frame
+    with its transferred and executed reproductions, in 3-D."""
+    fig = plt.figure(figsize=(6.5 * len(traces), 6.0))
+    for col, (name, trace) in enumerate(traces.items(), start=1):
+        ax = fig.add_subplot(1, len(traces), col, projection="3d")
+        extent = np.ptp(np.vstack([p for t in trace.values() for p in t.values()]), axis=0)
+        ax.set_box_aspect(extent[[0, 2, 1]] + 1e-3)       # metres look like metres
+        for key, style in STYLES.items():
+            for k, points in enumerate(trace[key].values()):
+                ax.plot(points[:, 0], points[:, 2], points[:, 1],
+                        **{**style, "label": style["label"] if k == 0 else None})
+        ax.set_xlabel("x forward (m)")
+        ax.set_ylabel("z right (m)")
+        ax.set_zlabel("y up (m)")
+        ax.set_title(name)
+        ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle("Letters on the robots (like thesis Fig. 4-11 and 4-13)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(args=None):
+    _, results = run_job("experiment", Experiment, lambda node: node.run(), args)
+    print(json.dumps(results, indent=1))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

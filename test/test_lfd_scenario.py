@@ -1,0 +1,79 @@
+"""The chapter 4 graph scenario (scenarios/lfd/run.sh) with the smoke.yaml override: 2 letters
+x 2 demonstrations, 1500 correspondences a robot; every node a real process over DDS
+(demonstration_source, lpa_mapping, two robot_sim nodes in position mode, two skill_learner
+nodes, the recorder)."""
+import json
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from lpa_transfer.bag import read_messages, summary
+from ros_harness import run_scenario
+
+rclpy = pytest.importorskip("rclpy")
+from rclpy.serialization import deserialize_message  # noqa: E402
+from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction  # noqa: E402
+
+SCENARIO = ROOT / "scenarios" / "lfd"
+ROBOTS = ("pr2_right_arm", "meka_right_arm")
+
+
+@pytest.fixture(scope="module")
+def smoke_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("lfd") / "run"
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=400, overrides=["smoke.yaml"])
+    assert result.returncode == 0, result.stdout + result.stderr
+    return out
+
+
+def messages(run, topic, msg_type):
+    return [deserialize_message(m.data, msg_type)
+            for m in read_messages(run / "run.mcap", topics=[topic])]
+
+
+def test_both_robots_learn_the_letters(smoke_run):
+    """Mapping and executed encoding errors of a small run (1500 pairs; measured mapping
+    PR2 13.1, Meka 4.3 mm; encoding 13.9 and 5.6 mm; the IK method 3.5 and 3.3 mm)."""
+    results = json.loads((smoke_run / "results.json").read_text())
+    assert sorted(results) == sorted(ROBOTS)
+    for name, r in results.items():
+        assert r["pairs"] == 1500 and r["babbled"] >= 1500 and r["clusters"] > 1
+        assert 0 < r["mapping_error"] < 0.05, name
+        assert sorted(r["transferred_encoding_by_shape"]) == ["LShape", "Zshape"]
+        # the robot's own IK executed through its DMP tracks the letters closely
+        assert r["ik_method_encoding_error"] < 0.01, name
+        assert r["ik_method_encoding_error"] < r["transferred_encoding_error"] < 0.06, name
+    report = (smoke_run / "report.txt").read_text()
+    assert "IK method" in report and all(name in report for name in ROBOTS)
+    assert (smoke_run / "fig4_11_13_letters.png").stat().st_size > 10_000
+
+
+def test_the_bag_holds_demonstrations_and_executed_skills(smoke_run):
+    topics = summary(smoke_run / "run.mcap")
+    assert topics["/demonstrations"].message_count == 4
+    for name in ROBOTS:   # 2 shapes x (transferred, IK method)
+        assert topics[f"/{name}/skill_reproduction"].message_count == 4
+        assert topics[f"/{name}/joint_states"].message_count > 100
+    demos = messages(smoke_run, "/demonstrations", Demonstration)
+    assert [(d.shape, d.index) for d in demos] == [("LShape", 0), ("LShape", 1),
+                                                   ("Zshape", 0), ("Zshape", 1)]
+    assert all(d.joints.rows == 30 and d.joints.cols == 4 for d in demos)
+    reproduced = messages(smoke_run, "/meka_right_arm/skill_reproduction", SkillReproduction)
+    points = np.array(reproduced[0].executed_points.data).reshape(30, 3)
+    assert np.isfinite(points).all()
+    assert len(list((smoke_run / "models").iterdir())) == 2    # human -> each robot
+
+
+def test_demonstration_source_refuses_letters_out_of_reach(tmp_path):
+    """A task box the human cannot reach stops the node at start, saying why."""
+    from ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until
+    node = NodeProcess("demonstration_source", unique_domain_id(), tmp_path, ros_params(
+        frames=SCENARIO / "frames.yaml", shapes="[LShape]", n_demos=1, n_samples=10,
+        task_box_low="[1.0, 1.0, 1.0]", task_box_high="[1.5, 1.5, 1.5]"))
+    try:
+        wait_until(lambda: not node.alive(), timeout=60, what="demonstration_source to exit")
+        assert node.process.returncode == 1
+        assert "leaves the demonstrator's reach" in node.log()
+    finally:
+        node.stop()
