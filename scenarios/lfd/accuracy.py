@@ -26,8 +26,8 @@ import yaml  # noqa: E402
 
 from lpa_transfer.dmp import JointDMP  # noqa: E402
 from lpa_transfer.lfd_experiment import demonstrations, load_setup  # noqa: E402
-from lpa_transfer.lfd_skills import (CONDITIONS, accuracy_sweep, ik_method_errors,  # noqa: E402
-                                     multi_robot_transfer)
+from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, accuracy_sweep,  # noqa: E402
+                                     ik_method_errors, multi_robot_transfer)
 
 ROOT = Path(__file__).resolve().parents[2]
 THESIS_SWEEP = ("thesis §4.5.1-4.5.2 (Fig. 4-10/4-12, 5 runs): the mapping improves with more "
@@ -35,10 +35,6 @@ THESIS_SWEEP = ("thesis §4.5.1-4.5.2 (Fig. 4-10/4-12, 5 runs): the mapping impr
                 "for small samples); mapping errors on average below 0.01 m; the PR2 maps more "
                 "accurately and with less data than the Meka; encoding errors comparable with "
                 "the IK method's")
-#: Table 4.3 (to the Meka, m): mapping and encoding error (standard deviation) per condition.
-THESIS_TABLE = {"direct": ((0.0045, 0.0008), (0.0140, 0.0013)),
-                "refined": ((0.0062, 0.0041), (0.0138, 0.0005)),
-                "unrefined": ((0.0152, 0.0035), (0.0192, 0.0012))}
 
 
 def read_config(paths):

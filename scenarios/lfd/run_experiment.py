@@ -16,6 +16,12 @@ Running: ``demonstration_source`` (the human's demonstrations on ``demonstration
    demonstrations, the first reproduced and executed on the simulated robot. The same with
    the robot's own IK trajectories: the thesis' "IK method".
 
+Then Table 4.3 (§4.5.3): ``learner`` (the Meka) taught via ``teacher`` (the PR2): an LPA
+teacher -> learner in lpa_mapping (the learner babbles, the teacher's IK starts from the
+joint map composed through the human), fed the teacher's transferred demonstrations
+(unrefined) or its own IK trajectories (refined), and the learner's skill_learner executing
+them.
+
 Errors (m, against where the robot's task frame puts the demonstrated points, T_R^H x_H):
 mapping (the transferred joints' forward kinematics, every point) and encoding (the executed
 reproduction's end effector, each shape's first demonstration). Writes into ``output_dir``:
@@ -37,7 +43,8 @@ from rclpy.node import Node  # noqa: E402
 from lpa_transfer.lfd_correspondences import arm_kinematics  # noqa: E402
 from lpa_transfer.lfd_experiment import (Demonstration, collect_pairs,  # noqa: E402
                                          executed_errors, load_setup)
-from lpa_transfer.lfd_skills import by_shape, robot_ik_demonstrations  # noqa: E402
+from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, between,  # noqa: E402
+                                     by_shape, robot_ik_demonstrations)
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
@@ -59,6 +66,8 @@ class Experiment(Node):
         self.seed = int(declare("graph_seed", 0))
         self.fit = dict(method="lpa", n_min=int(declare("graph_n_min", 12)),
                         c_min=float(declare("c_min", 1e-7)), latent_dim=0, random_state=0)
+        self.teacher = declare("teacher", "pr2_right_arm")
+        self.learner = declare("learner", "meka_right_arm")
         self.output_dir = Path(declare("output_dir", "."))
         self.wait_timeout = float(declare("wait_timeout", 120.0))
         self.received = {}
@@ -100,37 +109,48 @@ class Experiment(Node):
             executed[shape] = from_matrix(answer.reproduction.executed_points, "points")
         return executed
 
+    def fit_model(self, model_id, learner, body):
+        """Correspondences body -> learner (babbling on the learner) and an LPA on them in
+        lpa_mapping: (poses babbled, clusters)."""
+        source, target, tried = collect_pairs(learner, body, self.pairs, self.seed)
+        fitted = self.calls.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
+                                 source=to_matrix(source), target=to_matrix(target), **self.fit)
+        return tried, fitted.n_clusters
+
+    def transfer(self, model_id, trajectories):
+        """Each trajectory's rows (T, D_s), whole, through lpa_mapping: the mapped rows."""
+        return [from_matrix(self.calls.call(TransferPoints, "/lpa_mapping/transfer",
+                                            model_id=model_id, source=to_matrix(rows)).target,
+                            "target") for rows in trajectories]
+
+    def encoding(self, name, demos, joints, targets):
+        """Skills of these joint trajectories executed on robot ``name``: ({shape: error},
+        {shape: executed points}) against ``targets`` {shape: T_R^H x_H of its first}."""
+        executed = self.learn_skills(name, demos, joints)
+        return ({shape: float(np.linalg.norm(executed[shape] - x, axis=1).mean())
+                 for shape, x in targets.items()}, executed)
+
     def robot(self, name, demos):
         learner = self.setup.learners[name]
         started = time.perf_counter()
-        source, target, tried = collect_pairs(learner, self.setup.demonstrator, self.pairs,
-                                              self.seed)
         model_id = f"{self.setup.demonstrator.name}->{name}"
-        fitted = self.calls.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
-                                 source=to_matrix(source), target=to_matrix(target), **self.fit)
-        mapped = [from_matrix(self.calls.call(TransferPoints, "/lpa_mapping/transfer",
-                                              model_id=model_id,
-                                              source=to_matrix(d.rows)).target, "target")
-                  for d in demos]
+        tried, clusters = self.fit_model(model_id, learner, self.setup.demonstrator)
+        mapped = self.transfer(model_id, [d.rows for d in demos])
         n = learner.joint_map.n_joints
         joints = {"transferred": [m[:, :n] for m in mapped],
                   "ik_method": [d.q for d in robot_ik_demonstrations(learner, demos)]}
-        result = {"pairs": self.pairs, "babbled": tried, "clusters": fitted.n_clusters,
-                  "mapping_error": float(np.mean([executed_errors(learner, m, d.x).mean()
-                                                  for m, d in zip(mapped, demos)]))}
+        result = {"pairs": self.pairs, "babbled": tried, "clusters": clusters,
+                  "mapping_error": mean_mapping_error(learner, mapped, demos)}
         firsts = {shape: members[0] for shape, members in by_shape(demos).items()}
         forward = arm_kinematics(learner.robot, n).forward
         traces = {"demonstrated": {s: learner.task_frame.to_robot(demos[i].x)
                                    for s, i in firsts.items()},
                   "mapped": {s: forward(joints["transferred"][i]) for s, i in firsts.items()}}
         for method in METHODS:
-            executed = self.learn_skills(name, demos, joints[method])
-            errors = {shape: float(np.linalg.norm(
-                executed[shape] - traces["demonstrated"][shape], axis=1).mean())
-                for shape in firsts}
+            errors, traces[method] = self.encoding(name, demos, joints[method],
+                                                   traces["demonstrated"])
             result[f"{method}_encoding_error"] = float(np.mean(list(errors.values())))
             result[f"{method}_encoding_by_shape"] = errors
-            traces[method] = executed
         self.get_logger().info(
             f"{name}: mapping {result['mapping_error'] * 1e3:.1f} mm, encoding "
             f"{result['transferred_encoding_error'] * 1e3:.1f} mm (IK method "
@@ -138,14 +158,42 @@ class Experiment(Node):
             f"{time.perf_counter() - started:.0f} s")
         return result, traces
 
+    def multi_robot(self, demos, results):
+        """Table 4.3 over the graph: the learner taught via the teacher, whose skills are
+        unrefined (human -> teacher -> learner through lpa_mapping) or refined (the teacher's
+        own IK trajectories -> learner); "direct" is the learner's own run."""
+        names = self.teacher, self.learner
+        teacher, learner = (self.setup.learners[name] for name in names)
+        relay_id = f"{names[0]}->{names[1]}"
+        self.fit_model(relay_id, between(teacher, learner), teacher.robot)
+        via = {"unrefined": self.transfer(
+                   relay_id, self.transfer(f"{self.setup.demonstrator.name}->{names[0]}",
+                                           [d.rows for d in demos])),
+               "refined": self.transfer(relay_id, [d.rows for d in
+                                                   robot_ik_demonstrations(teacher, demos)])}
+        targets = {shape: learner.task_frame.to_robot(demos[members[0]].x)
+                   for shape, members in by_shape(demos).items()}
+        direct = results[names[1]]
+        table = {"direct": {"mapping_error": direct["mapping_error"],
+                            "encoding_error": direct["transferred_encoding_error"]}}
+        for condition, mapped in via.items():
+            errors, _ = self.encoding(names[1], demos, [m[:, :learner.joint_map.n_joints]
+                                                        for m in mapped], targets)
+            table[condition] = {"mapping_error": mean_mapping_error(learner, mapped, demos),
+                                "encoding_error": float(np.mean(list(errors.values())))}
+        return {condition: table[condition] for condition in CONDITIONS}
+
     def run(self):
         demos = self.demonstrations()
         results, traces = {}, {}
         for name in self.setup.learners:
             results[name], traces[name] = self.robot(name, demos)
+        table = self.multi_robot(demos, results)
         self.output_dir.mkdir(parents=True, exist_ok=True)
-        (self.output_dir / "results.json").write_text(json.dumps(results, indent=1))
-        (self.output_dir / "report.txt").write_text(report(results, len(demos)))
+        (self.output_dir / "results.json").write_text(json.dumps(
+            {"robots": results, "multi_robot": table}, indent=1))
+        (self.output_dir / "report.txt").write_text(report(results, table, len(demos),
+                                                           self.teacher, self.learner))
         plot(self.output_dir / "fig4_11_13_letters.png", self.setup, demos, traces)
         return results
 
@@ -155,7 +203,13 @@ THESIS = ("thesis §4.5.1-4.5.2: mapping errors on average below 0.01 m (Fig. 4-
           "mapping 4.5 mm, encoding 14.0 mm")
 
 
-def report(results, n_demos):
+def mean_mapping_error(learner, mapped, demos):
+    """The mapping error (m) over every point of the demonstrations' mapped rows."""
+    return float(np.mean(np.concatenate([executed_errors(learner, m, d.x)
+                                         for m, d in zip(mapped, demos)])))
+
+
+def report(results, table, n_demos, teacher, learner):
     lines = [f"Thesis §4.5 over the node graph: {n_demos} demonstrations by the human, mapped "
              f"by lpa_mapping and encoded and executed by each robot's skill_learner on its "
              f"robot_sim (mm; mapping: every point, encoding: each shape's first "
@@ -167,6 +221,12 @@ def report(results, n_demos):
                      f"{r['mapping_error'] * 1e3:10.1f}"
                      f"{r['transferred_encoding_error'] * 1e3:10.1f}"
                      f"{r['ik_method_encoding_error'] * 1e3:11.1f}")
+    lines += ["", f"Table 4.3 over the graph ({learner} taught directly or via {teacher}; "
+                  f"thesis in brackets):", f"{'':12s}{'mapping':>18s}{'encoding':>18s}"]
+    for condition, errors in table.items():
+        (tm, _), (te, _) = THESIS_TABLE[condition]
+        lines.append(f"{condition:12s}{errors['mapping_error'] * 1e3:9.1f} ({tm * 1e3:4.1f})  "
+                     f"{errors['encoding_error'] * 1e3:9.1f} ({te * 1e3:4.1f})")
     return "\n".join(lines + ["", THESIS]) + "\n"
 
 
