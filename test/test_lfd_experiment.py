@@ -86,24 +86,39 @@ def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):
     assert executed_errors(learner, rows, demos[0].x).min() > 0.005
 
 
-def test_accuracy_script_writes_its_tables_and_figure(tmp_path):
-    """The smoke size end to end; the same config gives the same numbers."""
-    outputs = []
-    for name in ("run", "again"):
-        out = tmp_path / name
-        subprocess.run([sys.executable, str(ROOT / "scenarios" / "lfd" / "accuracy.py"),
-                        "--override", str(ROOT / "scenarios" / "lfd" / "smoke.yaml"),
-                        "--out", str(out)], check=True, timeout=900)
-        outputs.append(out)
-    rows = list(csv.DictReader(open(outputs[0] / "sweep.csv")))
+def test_accuracy_script_writes_its_tables_and_figure_and_joins_shares(tmp_path):
+    """The smoke size end to end for seed 0 and, as a second share, seed 1; --merge joins
+    them into what one run over both seeds writes."""
+    script = ROOT / "scenarios" / "lfd" / "accuracy.py"
+    smoke = ROOT / "scenarios" / "lfd" / "smoke.yaml"
+    second = tmp_path / "seed1.yaml"
+    second.write_text("experiment:\n  ros__parameters:\n    seeds: [1]\n")
+    runs = {"seed0": [], "seed1": ["--override", str(second)]}
+    for name, extra in runs.items():
+        subprocess.run([sys.executable, str(script), "--override", str(smoke), *extra,
+                        "--out", str(tmp_path / name)], check=True, timeout=900)
+    out = tmp_path / "seed0"
+    rows = list(csv.DictReader(open(out / "sweep.csv")))
     assert len(rows) == 2 * 2 * 2                   # robots x N_min x sizes, one seed
     assert all(0 < float(r[k]) < 500 for r in rows
                for k in ("mapping_error_mm", "encoding_error_mm"))
-    table = list(csv.DictReader(open(outputs[0] / "multi_robot.csv")))
+    table = list(csv.DictReader(open(out / "multi_robot.csv")))
     assert [r["condition"] for r in table] == ["direct", "refined", "unrefined"]
-    report = (outputs[0] / "report.txt").read_text()
+    report = (out / "report.txt").read_text()
     assert "pr2_right_arm: lowest mean" in report and "meka_right_arm: lowest mean" in report
     assert "Table 4.3" in report and "IK method" in report
-    assert (outputs[0] / "fig4_10_12_accuracy.png").stat().st_size > 10_000
-    for name in ("sweep.csv", "multi_robot.csv"):
-        assert (outputs[0] / name).read_text() == (outputs[1] / name).read_text()
+    assert (out / "fig4_10_12_accuracy.png").stat().st_size > 10_000
+
+    merged = tmp_path / "merged"
+    subprocess.run([sys.executable, str(script), "--override", str(smoke), "--out",
+                    str(merged), "--merge", str(tmp_path / "seed0"), str(tmp_path / "seed1")],
+                   check=True, timeout=120)
+    joined = list(csv.DictReader(open(merged / "sweep.csv")))
+    shares = rows + list(csv.DictReader(open(tmp_path / "seed1" / "sweep.csv")))
+    key = lambda r: (r["robot"], r["seed"], r["n_min"], r["training_size"])  # noqa: E731
+    assert sorted(joined, key=key) == sorted(shares, key=key)
+    assert "2 seed(s)" in (merged / "report.txt").read_text()
+    again = subprocess.run([sys.executable, str(script), "--override", str(smoke), "--out",
+                            str(tmp_path / "bad"), "--merge", str(out), str(out)],
+                           capture_output=True, text=True, timeout=120)
+    assert again.returncode != 0 and "repeat a seed" in again.stderr

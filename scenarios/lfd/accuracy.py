@@ -8,9 +8,11 @@ Usage: python scenarios/lfd/accuracy.py [--config FILE.yaml] [--override FILE.ya
                                         [--out DIR]
   defaults: scenarios/lfd/config.yaml, runs/lfd_accuracy; smoke.yaml shrinks it for the tests.
 Writes to DIR: sweep.csv (robot, seed, N_min, training size, mapping and encoding error in
-mm), multi_robot.csv (seed, condition, errors), fig4_10_12_accuracy.png (mean ± std over
-the seeds) and report.txt (the tables beside the thesis' numbers). The same config gives the
-same numbers.
+mm), multi_robot.csv (seed, condition, errors), ik_method.csv, fig4_10_12_accuracy.png
+(mean ± std over the seeds) and report.txt (the tables beside the thesis' numbers). The same
+config gives the same numbers. Shares of the seeds (``--override`` files naming seeds) run
+side by side; ``--merge RUN_DIR...`` (with the same config and the other overrides) joins
+them.
 """
 import argparse
 import csv
@@ -26,8 +28,9 @@ import yaml  # noqa: E402
 
 from lpa_transfer.dmp import JointDMP  # noqa: E402
 from lpa_transfer.lfd_experiment import demonstrations, load_setup  # noqa: E402
-from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, accuracy_sweep,  # noqa: E402
-                                     ik_method_errors, multi_robot_transfer)
+from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, SweepErrors,  # noqa: E402
+                                     TransferErrors, accuracy_sweep, ik_method_errors,
+                                     multi_robot_transfer)
 
 ROOT = Path(__file__).resolve().parents[2]
 THESIS_SWEEP = ("thesis §4.5.1-4.5.2 (Fig. 4-10/4-12, 5 runs): the mapping improves with more "
@@ -80,7 +83,12 @@ def log(text):
     print(text, file=sys.stderr, flush=True)
 
 
-def write_csvs(out, params, sweeps, table):
+def write_csvs(out, params, sweeps, ik_method, table):
+    with open(out / "ik_method.csv", "w", newline="") as f:
+        rows = csv.writer(f)
+        rows.writerow(["robot", "mapping_error_mm", "encoding_error_mm"])
+        for name, e in ik_method.items():
+            rows.writerow([name, f"{e.mapping * 1e3:.4f}", f"{e.encoding * 1e3:.4f}"])
     with open(out / "sweep.csv", "w", newline="") as f:
         rows = csv.writer(f)
         rows.writerow(["robot", "seed", "n_min", "training_size", "mapping_error_mm",
@@ -99,6 +107,36 @@ def write_csvs(out, params, sweeps, table):
                 e = result[condition]
                 rows.writerow([seed, condition, f"{e.mapping * 1e3:.4f}",
                                f"{e.encoding * 1e3:.4f}"])
+
+
+def read_csvs(run_dirs, params):
+    """Join runs that each swept a share of the seeds (same config otherwise): (seeds,
+    sweeps, ik_method, table) as :func:`run` and ``params["seeds"]`` give them."""
+    rows = {name: [r for d in run_dirs for r in csv.DictReader(open(Path(d) / name))]
+            for name in ("sweep.csv", "multi_robot.csv", "ik_method.csv")}
+    seeds = sorted({int(r["seed"]) for r in rows["multi_robot.csv"]})
+    shares = [sorted({int(r["seed"]) for r in csv.DictReader(open(Path(d) / "multi_robot.csv"))})
+              for d in run_dirs]
+    if sum(map(len, shares)) != len(seeds):
+        raise ValueError(f"the runs repeat a seed: {shares}")
+    sizes, n_mins = params["training_sizes"], params["n_mins"]
+    sweeps = {}
+    for r in rows["sweep.csv"]:
+        sweep = sweeps.setdefault(r["robot"], SweepErrors(
+            *(np.full((len(seeds), len(n_mins), len(sizes)), np.nan) for _ in range(2))))
+        index = (seeds.index(int(r["seed"])), n_mins.index(int(r["n_min"])),
+                 sizes.index(int(r["training_size"])))
+        sweep.mapping[index] = float(r["mapping_error_mm"]) / 1e3
+        sweep.encoding[index] = float(r["encoding_error_mm"]) / 1e3
+    if any(np.isnan(s.mapping).any() for s in sweeps.values()):
+        raise ValueError("the runs' sweeps do not cover every seed, N_min and size")
+    ik_method = {r["robot"]: TransferErrors(float(r["mapping_error_mm"]) / 1e3,
+                                            float(r["encoding_error_mm"]) / 1e3)
+                 for r in rows["ik_method.csv"]}
+    table = [{r["condition"]: TransferErrors(float(r["mapping_error_mm"]) / 1e3,
+                                             float(r["encoding_error_mm"]) / 1e3)
+              for r in rows["multi_robot.csv"] if int(r["seed"]) == seed} for seed in seeds]
+    return seeds, sweeps, ik_method, table
 
 
 def plot(path, params, sweeps, ik_method):
@@ -135,8 +173,9 @@ def _cells(errors):
                    zip(errors.mean(axis=0) * 1e3, errors.std(axis=0) * 1e3))
 
 
-def report(params, demos, sweeps, ik_method, table, wall):
-    lines = [f"Thesis §4.5 in process: {len(demos)} demonstrations "
+def report(params, sweeps, ik_method, table, wall):
+    lines = [f"Thesis §4.5 in process: {len(params['shapes']) * params['n_demos']} "
+             f"demonstrations "
              f"({len(params['shapes'])} shapes x {params['n_demos']}, "
              f"{params['n_samples']} points each), LPA c_min {params['c_min']:g}, "
              f"{len(params['seeds'])} seed(s), DMPs with {params['dmp_weights_per_joint']} "
@@ -179,15 +218,21 @@ def main(argv=None):
     parser.add_argument("--config", default=ROOT / "scenarios" / "lfd" / "config.yaml")
     parser.add_argument("--override", action="append", default=[])
     parser.add_argument("--out", default=ROOT / "runs" / "lfd_accuracy")
+    parser.add_argument("--merge", nargs="+", metavar="RUN_DIR",
+                        help="join the CSVs of runs over shares of the seeds (same config and "
+                             "overrides but the seeds) instead of running")
     args = parser.parse_args(argv)
     params = read_config([args.config, *args.override])
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    demos, sweeps, ik_method, table = run(params)
-    write_csvs(out, params, sweeps, table)
+    if args.merge:
+        params["seeds"], sweeps, ik_method, table = read_csvs(args.merge, params)
+    else:
+        _, sweeps, ik_method, table = run(params)
+    write_csvs(out, params, sweeps, ik_method, table)
     plot(out / "fig4_10_12_accuracy.png", params, sweeps, ik_method)
-    text = report(params, demos, sweeps, ik_method, table, time.perf_counter() - started)
+    text = report(params, sweeps, ik_method, table, time.perf_counter() - started)
     (out / "report.txt").write_text(text)
     print(text, end="")
 
