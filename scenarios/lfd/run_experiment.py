@@ -26,7 +26,8 @@ Errors (m, against where the robot's task frame puts the demonstrated points, T_
 mapping (the transferred joints' forward kinematics, every point) and encoding (the executed
 reproduction's end effector, each shape's first demonstration). Writes into ``output_dir``:
 ``results.json``, ``report.txt`` and ``fig4_11_13_letters.png`` (demonstrations, transferred
-and reproduced letters in 3-D, like Fig. 4-11/4-13).
+and reproduced letters in 3-D, like Fig. 4-11/4-13, and the learner's via the teacher, like
+Fig. 4-15).
 """
 import json
 import sys
@@ -158,10 +159,11 @@ class Experiment(Node):
             f"{time.perf_counter() - started:.0f} s")
         return result, traces
 
-    def multi_robot(self, demos, results):
+    def multi_robot(self, demos, results, direct_traces):
         """Table 4.3 over the graph: the learner taught via the teacher, whose skills are
         unrefined (human -> teacher -> learner through lpa_mapping) or refined (the teacher's
-        own IK trajectories -> learner); "direct" is the learner's own run."""
+        own IK trajectories -> learner); "direct" is the learner's own run (its
+        ``direct_traces``). Returns (table, executed traces for the picture)."""
         names = self.teacher, self.learner
         teacher, learner = (self.setup.learners[name] for name in names)
         relay_id = f"{names[0]}->{names[1]}"
@@ -176,19 +178,21 @@ class Experiment(Node):
         direct = results[names[1]]
         table = {"direct": {"mapping_error": direct["mapping_error"],
                             "encoding_error": direct["transferred_encoding_error"]}}
+        traces = {"demonstrated": targets, "transferred": direct_traces["transferred"]}
         for condition, mapped in via.items():
-            errors, _ = self.encoding(names[1], demos, [m[:, :learner.joint_map.n_joints]
-                                                        for m in mapped], targets)
+            errors, traces[condition] = self.encoding(
+                names[1], demos, [m[:, :learner.joint_map.n_joints] for m in mapped], targets)
             table[condition] = {"mapping_error": mean_mapping_error(learner, mapped, demos),
                                 "encoding_error": float(np.mean(list(errors.values())))}
-        return {condition: table[condition] for condition in CONDITIONS}
+        return {condition: table[condition] for condition in CONDITIONS}, traces
 
     def run(self):
         demos = self.demonstrations()
         results, traces = {}, {}
         for name in self.setup.learners:
             results[name], traces[name] = self.robot(name, demos)
-        table = self.multi_robot(demos, results)
+        table, traces[f"{self.learner} via {self.teacher}"] = self.multi_robot(
+            demos, results, traces[self.learner])
         self.output_dir.mkdir(parents=True, exist_ok=True)
         (self.output_dir / "results.json").write_text(json.dumps(
             {"robots": results, "multi_robot": table}, indent=1))
@@ -234,19 +238,24 @@ STYLES = {"demonstrated": dict(color="tab:red", lw=2.5, label="demonstration (T_
           "mapped": dict(color="tab:green", lw=1.2, label="transferred (FK of LPA joints)"),
           "transferred": dict(color="tab:blue", lw=1.2, ls="--",
                               label="DMP of transferred, executed"),
-          "ik_method": dict(color="black", lw=0.8, ls=":", label="DMP of own IK, executed")}
+          "ik_method": dict(color="black", lw=0.8, ls=":", label="DMP of own IK, executed"),
+          "refined": dict(color="tab:orange", lw=1.2, ls="-.",
+                          label="via the teacher, refined: DMP executed"),
+          "unrefined": dict(color="tab:purple", lw=1.2, ls=":",
+                            label="via the teacher, unrefined: DMP executed")}
 
 
 def plot(path, setup, demos, traces):
     """Fig. 4-11/4-13 like: per robot, every shape's first demonstration in the robot's frame
-    with its transferred and executed reproductions, in 3-D."""
+    with its transferred and executed reproductions, in 3-D; Fig. 4-15 like: the learner's
+    executed letters taught directly and via the teacher."""
     fig = plt.figure(figsize=(6.5 * len(traces), 6.0))
     for col, (name, trace) in enumerate(traces.items(), start=1):
         ax = fig.add_subplot(1, len(traces), col, projection="3d")
         extent = np.ptp(np.vstack([p for t in trace.values() for p in t.values()]), axis=0)
         ax.set_box_aspect(extent[[0, 2, 1]] + 1e-3)       # metres look like metres
         for key, style in STYLES.items():
-            for k, points in enumerate(trace[key].values()):
+            for k, points in enumerate(trace.get(key, {}).values()):
                 ax.plot(points[:, 0], points[:, 2], points[:, 1],
                         **{**style, "label": style["label"] if k == 0 else None})
         ax.set_xlabel("x forward (m)")
@@ -254,7 +263,7 @@ def plot(path, setup, demos, traces):
         ax.set_zlabel("y up (m)")
         ax.set_title(name)
         ax.legend(fontsize=7, loc="upper left")
-    fig.suptitle("Letters on the robots (like thesis Fig. 4-11 and 4-13)")
+    fig.suptitle("Letters on the robots (like thesis Fig. 4-11, 4-13 and 4-15)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
