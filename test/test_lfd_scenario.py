@@ -13,7 +13,8 @@ from ros_harness import run_scenario
 
 rclpy = pytest.importorskip("rclpy")
 from rclpy.serialization import deserialize_message  # noqa: E402
-from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction  # noqa: E402
+from lpa_transfer_interfaces.msg import (CorrespondenceBatch, Demonstration,  # noqa: E402
+                                         SkillReproduction)
 
 SCENARIO = ROOT / "scenarios" / "lfd"
 ROBOTS = ("pr2_right_arm", "meka_right_arm")
@@ -77,6 +78,13 @@ def test_the_bag_holds_demonstrations_and_executed_skills(smoke_run):
     points = np.array(reproduced[0].executed_points.data).reshape(30, 3)
     assert np.isfinite(points).all()
     assert len(list((smoke_run / "models").iterdir())) == 3    # human -> each, PR2 -> Meka
+    batches = messages(smoke_run, "/correspondence_batch", CorrespondenceBatch)
+    assert [(b.source_robot, b.target_robot) for b in batches] == [
+        ("human_arm", "pr2_right_arm"), ("human_arm", "meka_right_arm"),
+        ("pr2_right_arm", "meka_right_arm")]
+    assert all(b.source.rows == 1500 and b.target.cols == 7 for b in batches)
+    for name, count in zip(ROBOTS, (8, 16)):   # every demonstration a skill was fitted on
+        assert topics[f"/{name}/skill_demonstrations"].message_count == count
 
 
 def test_demonstration_source_refuses_letters_out_of_reach(tmp_path):

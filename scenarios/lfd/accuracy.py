@@ -112,7 +112,8 @@ def write_csvs(out, params, sweeps, ik_method, table):
 def read_csvs(run_dirs, params):
     """Join runs that each swept a share of the seeds (same config otherwise): (seeds,
     sweeps, ik_method, table) as :func:`run` and ``params["seeds"]`` give them."""
-    rows = {name: [r for d in run_dirs for r in csv.DictReader(open(Path(d) / name))]
+    rows = {name: [r for d in run_dirs if (Path(d) / name).exists()
+                   for r in csv.DictReader(open(Path(d) / name))]
             for name in ("sweep.csv", "multi_robot.csv", "ik_method.csv")}
     seeds = sorted({int(r["seed"]) for r in rows["multi_robot.csv"]})
     shares = [sorted({int(r["seed"]) for r in csv.DictReader(open(Path(d) / "multi_robot.csv"))})
@@ -130,9 +131,13 @@ def read_csvs(run_dirs, params):
         sweep.encoding[index] = float(r["encoding_error_mm"]) / 1e3
     if any(np.isnan(s.mapping).any() for s in sweeps.values()):
         raise ValueError("the runs' sweeps do not cover every seed, N_min and size")
+    # the IK method has no seed: every share that wrote it must agree (one is enough)
     ik_method = {r["robot"]: TransferErrors(float(r["mapping_error_mm"]) / 1e3,
                                             float(r["encoding_error_mm"]) / 1e3)
                  for r in rows["ik_method.csv"]}
+    if set(ik_method) != set(sweeps) or len({tuple(r.values()) for r in rows["ik_method.csv"]}) \
+            != len(ik_method):
+        raise ValueError("the runs' ik_method.csv files are missing or disagree")
     table = [{r["condition"]: TransferErrors(float(r["mapping_error_mm"]) / 1e3,
                                              float(r["encoding_error_mm"]) / 1e3)
               for r in rows["multi_robot.csv"] if int(r["seed"]) == seed} for seed in seeds]

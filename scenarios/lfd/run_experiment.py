@@ -24,7 +24,9 @@ them.
 
 Errors (m, against where the robot's task frame puts the demonstrated points, T_R^H x_H):
 mapping (the transferred joints' forward kinematics, every point) and encoding (the executed
-reproduction's end effector, each shape's first demonstration). Writes into ``output_dir``:
+reproduction's end effector, each shape's first demonstration). Published for the bag: every
+model's correspondences (``correspondence_batch``) and the trajectories each robot learned
+from (``/<robot>/skill_demonstrations``). Writes into ``output_dir``:
 ``results.json``, ``report.txt`` and ``fig4_11_13_letters.png`` (demonstrations, transferred
 and reproduced letters in 3-D, like Fig. 4-11/4-13, and the learner's via the teacher, like
 Fig. 4-15).
@@ -46,6 +48,7 @@ from lpa_transfer.lfd_experiment import (Demonstration, collect_pairs,  # noqa: 
                                          executed_errors, load_setup)
 from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, between,  # noqa: E402
                                      by_shape, robot_ik_demonstrations)
+from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
@@ -74,6 +77,13 @@ class Experiment(Node):
         self.received = {}
         self.create_subscription(DemonstrationMsg, "demonstrations", self.on_demonstration,
                                  demonstration_qos(self.n_expected))
+        # for the bag: the correspondences of every model and the trajectories each robot
+        # learned from (latched, so the recorder gets them whatever its discovery lag)
+        self.batch_pub = self.create_publisher(CorrespondenceBatch, "correspondence_batch",
+                                               demonstration_qos(10))
+        self.skill_demo_pubs = {name: self.create_publisher(
+            DemonstrationMsg, f"/{name}/skill_demonstrations", demonstration_qos(1000))
+            for name in self.setup.learners}
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
         self.calls = ServiceCalls(self, self.spinner, float(declare("call_timeout", 600.0)),
@@ -105,6 +115,8 @@ class Experiment(Node):
                                                              demos[i].x), k, len(members),
                                          self.get_clock().now().to_msg())
                        for k, i in enumerate(members)]
+            for msg in request:
+                self.skill_demo_pubs[name].publish(msg)
             answer = self.calls.call(LearnSkill, f"/{name}/skill_learner/learn_skill",
                                      shape=shape, demonstrations=request)
             executed[shape] = from_matrix(answer.reproduction.executed_points, "points")
@@ -114,6 +126,11 @@ class Experiment(Node):
         """Correspondences body -> learner (babbling on the learner) and an LPA on them in
         lpa_mapping: (poses babbled, clusters)."""
         source, target, tried = collect_pairs(learner, body, self.pairs, self.seed)
+        batch = CorrespondenceBatch(source_robot=body.name, target_robot=learner.robot.name,
+                                    pairing_rule="same_task_point", source=to_matrix(source),
+                                    target=to_matrix(target))
+        batch.header.stamp, batch.header.frame_id = self.get_clock().now().to_msg(), "world"
+        self.batch_pub.publish(batch)
         fitted = self.calls.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
                                  source=to_matrix(source), target=to_matrix(target), **self.fit)
         return tried, fitted.n_clusters
