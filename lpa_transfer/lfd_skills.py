@@ -91,9 +91,14 @@ def _split(rows, demos):
     return np.split(rows, np.cumsum([len(d.times) for d in demos])[:-1])
 
 
+def mapping_error(learner, demos, mapped_rows):
+    """The mapping error (m): the mean of :func:`executed_errors` over every point of the
+    demonstrations, ``mapped_rows`` their mapped rows stacked in order (sum T_i, n + 3)."""
+    return float(executed_errors(learner, mapped_rows, np.vstack([d.x for d in demos])).mean())
+
+
 def _errors(learner, demos, mapped_rows, dmp):
-    x_demo = np.vstack([d.x for d in demos])
-    mapping = float(executed_errors(learner, mapped_rows, x_demo).mean())
+    mapping = mapping_error(learner, demos, mapped_rows)
     joints = [r[:, :learner.joint_map.n_joints] for r in _split(mapped_rows, demos)]
     encoding = float(np.mean(list(encoding_errors(learner, demos, joints, dmp).values())))
     return TransferErrors(mapping, encoding)

@@ -6,7 +6,6 @@ import yaml
 
 from conftest import ROOT
 from lpa_transfer.dmp import JointDMP
-from lpa_transfer.lfd_correspondences import arm_kinematics
 from lpa_transfer.lfd_experiment import demonstrations, executed_errors, load_setup
 from lpa_transfer.lfd_skills import (CONDITIONS, accuracy_sweep, between, by_shape,
                                      encoding_errors, ik_method_errors, multi_robot_transfer,

@@ -44,10 +44,9 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.lfd_correspondences import arm_kinematics  # noqa: E402
-from lpa_transfer.lfd_experiment import (Demonstration, collect_pairs,  # noqa: E402
-                                         executed_errors, load_setup)
+from lpa_transfer.lfd_experiment import Demonstration, collect_pairs, load_setup  # noqa: E402
 from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, between,  # noqa: E402
-                                     by_shape, robot_ik_demonstrations)
+                                     by_shape, mapping_error, robot_ik_demonstrations)
 from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
@@ -158,7 +157,7 @@ class Experiment(Node):
         joints = {"transferred": [m[:, :n] for m in mapped],
                   "ik_method": [d.q for d in robot_ik_demonstrations(learner, demos)]}
         result = {"pairs": self.pairs, "babbled": tried, "clusters": clusters,
-                  "mapping_error": mean_mapping_error(learner, mapped, demos)}
+                  "mapping_error": mapping_error(learner, demos, np.vstack(mapped))}
         firsts = {shape: members[0] for shape, members in by_shape(demos).items()}
         forward = arm_kinematics(learner.robot, n).forward
         traces = {"demonstrated": {s: learner.task_frame.to_robot(demos[i].x)
@@ -199,7 +198,7 @@ class Experiment(Node):
         for condition, mapped in via.items():
             errors, traces[condition] = self.encoding(
                 names[1], demos, [m[:, :learner.joint_map.n_joints] for m in mapped], targets)
-            table[condition] = {"mapping_error": mean_mapping_error(learner, mapped, demos),
+            table[condition] = {"mapping_error": mapping_error(learner, demos, np.vstack(mapped)),
                                 "encoding_error": float(np.mean(list(errors.values())))}
         return {condition: table[condition] for condition in CONDITIONS}, traces
 
@@ -215,19 +214,13 @@ class Experiment(Node):
             {"robots": results, "multi_robot": table}, indent=1))
         (self.output_dir / "report.txt").write_text(report(results, table, len(demos),
                                                            self.teacher, self.learner))
-        plot(self.output_dir / "fig4_11_13_letters.png", self.setup, demos, traces)
+        plot(self.output_dir / "fig4_11_13_letters.png", traces)
         return results
 
 
 THESIS = ("thesis §4.5.1-4.5.2: mapping errors on average below 0.01 m (Fig. 4-10); encoding "
           "errors comparable with the IK method's (Fig. 4-12); Table 4.3 (human -> Meka): "
           "mapping 4.5 mm, encoding 14.0 mm")
-
-
-def mean_mapping_error(learner, mapped, demos):
-    """The mapping error (m) over every point of the demonstrations' mapped rows."""
-    return float(np.mean(np.concatenate([executed_errors(learner, m, d.x)
-                                         for m, d in zip(mapped, demos)])))
 
 
 def report(results, table, n_demos, teacher, learner):
@@ -262,7 +255,7 @@ STYLES = {"demonstrated": dict(color="tab:red", lw=2.5, label="demonstration (T_
                             label="via the teacher, unrefined: DMP executed")}
 
 
-def plot(path, setup, demos, traces):
+def plot(path, traces):
     """Fig. 4-11/4-13 like: per robot, every shape's first demonstration in the robot's frame
     with its transferred and executed reproductions, in 3-D; Fig. 4-15 like: the learner's
     executed letters taught directly and via the teacher."""
