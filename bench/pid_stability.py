@@ -35,7 +35,7 @@ from lpa_transfer.lwpr import LWPR  # noqa: E402
 from lpa_transfer.online_learning import FeedForwardLearner  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
-from lpa_transfer.tasks import joint_trajectory, star_trajectory  # noqa: E402
+from lpa_transfer.tasks import star_task  # noqa: E402
 
 PHYSICS_STEP = 1e-3
 #: robot file stem: (PID kp, ki, kd of §5.5.2, star centre pose q_c, star radius m): Star 1
@@ -60,14 +60,9 @@ def with_drives(robot, drives):
 
 def desired(robot, q_centre, radius, dt):
     """Desired task points (T, 3) and joint trajectory (q, q̇, q̈) of one star trial."""
-    kinematics = robot_kinematics(robot)
-    centre = kinematics.forward(np.array([q_centre]))[0]
-    x_d = star_trajectory(centre, PLANE_U, PLANE_V, radius, dt)
-    q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack([centre[None], x_d]),
-                                             np.array(q_centre, dtype=float), dt)
-    if residuals.max() > 1e-6:
-        raise SystemExit(f"{robot.name}: the star leaves the workspace by {residuals.max()} m")
-    return x_d, q[1:], qd[1:], qdd[1:]
+    q, qd, qdd, x_d = star_task(robot_kinematics(robot, q_centre), radius, dt, PLANE_U,
+                                PLANE_V, tolerance=1e-6)
+    return x_d, q, qd, qdd
 
 
 def pid_trial(robot, gains, trajectory, dt):

@@ -72,3 +72,26 @@ def tracking_error(desired, actual):
         raise ValueError(f"desired and actual must be non-empty (T, m) arrays of one shape, "
                          f"got {desired.shape} and {actual.shape}")
     return float(np.linalg.norm(desired - actual, axis=1).mean())
+
+
+def star_task(kinematics, radius, dt, u=None, v=None, spread=2 * np.pi, start_angle=0.0,
+              tolerance=1e-3):
+    """One trial of a star (§5.5.1) around the end effector at ``kinematics.home``, from rest
+    there: ``(q_d, q̇_d, q̈_d, x_d)``, T rows each (the centre itself not included).
+
+    ``u``, ``v``: the star's plane (default world x and y). ValueError when the inverse
+    kinematics misses a star point by more than ``tolerance`` (m): the star leaves the
+    workspace.
+    """
+    centre = kinematics.forward(kinematics.home[None])[0]
+    dims = len(centre)
+    u = np.eye(dims)[0] if u is None or not len(u) else u
+    v = np.eye(dims)[1] if v is None or not len(v) else v
+    x_d = star_trajectory(centre, u, v, radius, dt, spread=spread, start_angle=start_angle)
+    q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack((centre, x_d)),
+                                             kinematics.home, dt)
+    if residuals.max() > tolerance:
+        raise ValueError(f"the star leaves the robot's workspace: inverse kinematics misses "
+                         f"it by up to {residuals.max():.4f} m (move the centre pose inwards "
+                         f"or shrink the radius)")
+    return q[1:], qd[1:], qdd[1:], x_d

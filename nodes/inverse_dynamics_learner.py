@@ -44,7 +44,7 @@ from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.control import PID
 from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
 from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.tasks import joint_trajectory, star_trajectory
+from lpa_transfer.tasks import star_task
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
 from lpa_transfer_nodes._ros_util import (RobotClients, answering, array_parameter,
@@ -96,21 +96,10 @@ class InverseDynamicsLearner(Node):
         """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
         kinematics = robot_kinematics(self.robot, doubles("centre_pose") or None)
         self.centre_pose = kinematics.home
-        centre = kinematics.forward(kinematics.home[None])[0]
-        dims = len(centre)
-        u = doubles("star_u") or [1.0, 0.0, 0.0][:dims]
-        v = doubles("star_v") or [0.0, 1.0, 0.0][:dims]
-        x_d = star_trajectory(centre, u, v, self.declare_parameter("star_radius", 0.05).value,
-                              self.dt, spread=self.declare_parameter("star_spread",
-                                                                     2 * np.pi).value,
-                              start_angle=self.declare_parameter("star_start_angle", 0.0).value)
-        q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack((centre, x_d)),
-                                                 kinematics.home, self.dt)
-        if residuals.max() > 1e-3:
-            raise ValueError(f"the star leaves the robot's workspace: inverse kinematics misses "
-                             f"it by up to {residuals.max():.4f} m (move centre_pose inwards "
-                             f"or shrink star_radius)")
-        return q[1:], qd[1:], qdd[1:], x_d
+        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
+        return star_task(kinematics, declare("star_radius", 0.05), self.dt, doubles("star_u"),
+                         doubles("star_v"), declare("star_spread", 2 * np.pi),
+                         declare("star_start_angle", 0.0))
 
     def fresh_learner(self, pid):
         """A learner that knows nothing yet: a new regressor of the configured kind."""

@@ -7,7 +7,7 @@ from lpa_transfer.control import PID
 from lpa_transfer.lwpr import LWPR
 from lpa_transfer.online_learning import (FeedForwardLearner, input_scale, make_regressor)
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.tasks import joint_trajectory, star_trajectory
+from lpa_transfer.tasks import star_task
 from two_link import robot
 
 DT = 0.01
@@ -18,12 +18,7 @@ PINCHER_CENTRE = [0.0, 0.6, 0.9, 0.6]
 def pincher_task():
     params = robot("pincher_arm")
     kinematics = robot_kinematics(params, PINCHER_CENTRE)
-    centre = kinematics.forward(kinematics.home[None])[0]
-    x_d = star_trajectory(centre, [1, 0, 0], [0, 1, 0], 0.05, DT)
-    q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack((centre, x_d)),
-                                             kinematics.home, DT)
-    assert residuals.max() < 1e-6
-    return params, (q[1:], qd[1:], qdd[1:], x_d)
+    return params, star_task(kinematics, 0.05, DT, tolerance=1e-6)
 
 
 def learner_for(trajectory, **lwpr):

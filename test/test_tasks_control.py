@@ -5,8 +5,8 @@ import pytest
 from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.control import PID, start_servo
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.tasks import (minimum_jerk, joint_trajectory, star_tips, star_trajectory,
-                                tracking_error)
+from lpa_transfer.tasks import (minimum_jerk, joint_trajectory, star_task, star_tips,
+                                star_trajectory, tracking_error)
 from two_link import robot
 
 DT = 0.01
@@ -53,6 +53,17 @@ def test_joint_trajectory_follows_the_task_through_inverse_kinematics():
     assert np.allclose(kinematics.forward(q), path, atol=1e-6)
     assert np.allclose(qd, np.gradient(q, DT, axis=0)) and np.allclose(qdd,
                                                                         np.gradient(qd, DT, axis=0))
+
+
+def test_star_task_is_the_star_around_the_home_pose_in_joint_space():
+    kinematics = robot_kinematics(robot("two_link_target"), [0.5, 1.2])
+    q, qd, qdd, x_d = star_task(kinematics, 0.05, DT, start_angle=0.3)
+    centre = kinematics.forward(kinematics.home[None])[0]
+    assert np.allclose(x_d, star_trajectory(centre, [1, 0], [0, 1], 0.05, DT, start_angle=0.3))
+    assert q.shape == qd.shape == qdd.shape == (840, 2)
+    assert np.allclose(kinematics.forward(q), x_d, atol=1e-6)
+    with pytest.raises(ValueError, match="leaves the robot's workspace"):
+        star_task(kinematics, 5.0, DT)                 # far beyond the 1.1 m arm
 
 
 def test_tracking_error_is_the_mean_distance():
