@@ -1,0 +1,197 @@
+#!/usr/bin/env python3
+"""How much of the chapter 5 transfer is lost in the mapping? (thesis §5.4, §5.5.3; issue 4)
+
+Usage: ``python bench/id_transfer_headroom.py [--seed S] [--trials N] [--targets pincher youbot]
+[--stars star1 star2]``, from the repository root.
+
+In process, with the library only (no ROS), from ``scenarios/inverse_dynamics/config.yaml``:
+for each target robot and star, the babbling of experiment seed S (both robots track the same
+random task lines near the star with PID only, paired by time index; the robots start at the
+star's centre pose, so the pairs of Star 2 differ slightly from the graph's, whose robots go on
+from where Star 1's babbling left them), then
+
+1. the held-out nMSE of PA on those pairs per feature (q, q̇, q̈, τ; median over the joints the
+   babbling moves), 6 blocks of whole lines each held out once: 1 means no better than
+   predicting the mean;
+2. the tracking error per trial (mm) of a fresh learner initialised with nothing
+   (uninitialised), with the target's own babbling side of the pairs (random), with the
+   source's experience of the star from scratch mapped by PA and LPA (transfer-PA/-LPA), and
+   with the target's own experience of the star from scratch (oracle: the data a perfect
+   mapping would deliver, as many samples as the source's).
+
+The simulation and the learners are deterministic: the same seed prints the same numbers.
+"""
+import argparse
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
+from lpa_transfer.control import PID, start_servo
+from lpa_transfer.correspondences import collect_correspondences
+from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
+from lpa_transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.tasks import star_task
+
+CONFIG = Path("scenarios/inverse_dynamics/config.yaml")
+N_FOLDS = 6
+MOVING = 1e-3          # a column whose spread is below this is a joint the babbling leaves still
+
+
+class StarRobot:
+    """One robot of the scenario on one star: its simulator, task and learner settings."""
+
+    def __init__(self, config, name, star):
+        node = config[f"/{name}/{star}"]["ros__parameters"]
+        self.params = load_robot_params(node["robot"])
+        self.kinematics = robot_kinematics(self.params, node["centre_pose"])
+        self.dt = 1.0 / node["control_rate"]
+        physics_step = config[f"/{name}/robot_sim"]["ros__parameters"]["physics_step"]
+        self.n_steps = max(1, round(self.dt / physics_step))
+        self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
+                                    start_angle=node["star_start_angle"])
+        self.pid_gains = node["pid"]
+        self.regressor = (node["regressor"], dict(json.loads(node["regressor_params"]),
+                                                  norm_in=input_scale(*self.trajectory[:3])))
+        self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
+                                  initial_positions=self.kinematics.home)
+
+    def learner(self, samples=None):
+        learner = FeedForwardLearner(make_regressor(self.regressor[0], **self.regressor[1]),
+                                     PID.from_gains(self.pid_gains))
+        if samples is not None:
+            learner.initialise(samples)
+        return learner
+
+    def trials(self, learner, n_trials):
+        """Tracking errors (m) and the experience of ``n_trials`` trials from rest at the centre."""
+        self.sim.reset(self.kinematics.home)
+        state, errors, experience = self.sim.state(), [], []
+        for _ in range(n_trials):
+            trial = learner.run_trial(self.sim.step, state, *self.trajectory, self.n_steps,
+                                      self.dt)
+            state = trial.end_state
+            errors.append(trial.tracking_error)
+            experience.append(trial.samples)
+        return errors, np.vstack(experience)
+
+
+def babble(config, robots, star, seed):
+    """The seed's correspondences near ``star``: (source rows, target rows) as the graph's
+    collector /babbling/<star> makes them (source = the config's source robot)."""
+    common = config["/babbling/*"]["ros__parameters"]
+    own = config[f"/babbling/{star}"]["ros__parameters"]
+    k = config["experiment"]["ros__parameters"]["stars"].index(star)
+    program = BabblingProgram(common["program"], common["n_segments"],
+                              common["samples_per_segment"], 10 * seed + k)
+    kinematics, steps = [], []
+    for side, robot in zip(("source", "target"), robots):
+        kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
+            robot.kinematics, own[f"{side}_task_halfwidth"])))
+        robot.sim.reset(robot.kinematics.home)
+        steps.append(start_servo(robot.sim.step, robot.params.n_joints,
+                                 PID.from_gains(common[f"{side}_pid"])).step)
+    pairs = collect_correspondences(program, common["pairing_rule"], *kinematics, *steps,
+                                    common["steps_per_sample"], tuple(common["features"]))
+    return pairs.source, pairs.target
+
+
+def feature_nmse(make_model, source, target):
+    """Held-out nMSE per feature group (q, q̇, q̈, τ): the median over the moving joints."""
+    squared = np.zeros(target.shape[1])
+    for fold in np.array_split(np.arange(len(source)), N_FOLDS):
+        train = np.setdiff1d(np.arange(len(source)), fold)
+        predicted = make_model().fit(source[train], target[train]).transfer(source[fold])
+        squared += ((predicted - target[fold]) ** 2).sum(axis=0)
+    spread = target.var(axis=0)
+    nmse = squared / len(source) / np.where(spread > 0, spread, 1.0)
+    n = target.shape[1] // 4
+    moving = target[:, :n].std(axis=0) > MOVING
+    return [float(np.median(nmse[g * n:(g + 1) * n][moving])) for g in range(4)]
+
+
+def against_own(robot, own_experience, samples, near=0.5):
+    """Where ``samples`` lie and what torques they carry, against the target's own star
+    experience: the median distance of their (q, q̇, q̈) to the nearest own sample (in units
+    of the learner's input scale, the spread of the star's desired states), and, for the
+    samples nearer than ``near``, the RMS difference of their torques from that own sample's
+    over the spread of the own torques (moving joints). The robot's own exact babbling
+    ('random') calibrates the second figure: neighbours ``near`` apart differ that much."""
+    from sklearn.neighbors import NearestNeighbors
+    n = robot.params.n_joints
+    scale = robot.regressor[1]["norm_in"]
+    index = NearestNeighbors(n_neighbors=1).fit(own_experience[:, :3 * n] / scale)
+    distance, nearest = index.kneighbors(samples[:, :3 * n] / scale)
+    distance, nearest = distance[:, 0], nearest[:, 0]
+    moving = own_experience[:, :n].std(axis=0) > MOVING
+    close = distance < near
+    own_tau = own_experience[:, 3 * n:][:, moving]
+    difference = samples[close][:, 3 * n:][:, moving] - own_tau[nearest[close]]
+    relative = np.sqrt((difference ** 2).mean()) / own_tau.std() if close.any() else np.nan
+    by_feature = []            # the same median distance in the q, q̇ and q̈ columns alone
+    for group in range(3):
+        columns = slice(group * n, (group + 1) * n)
+        alone = NearestNeighbors(n_neighbors=1).fit(own_experience[:, columns] / scale[columns])
+        by_feature.append(float(np.median(alone.kneighbors(samples[:, columns]
+                                                           / scale[columns])[0])))
+    return float(np.median(distance)), by_feature, float(close.mean()), float(relative)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--trials", type=int, default=5)
+    parser.add_argument("--targets", nargs="+", default=["pincher", "youbot"])
+    parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
+    args = parser.parse_args(argv)
+    config = yaml.safe_load(CONFIG.read_text())
+    experiment = config["experiment"]["ros__parameters"]
+    names = experiment["robots"]            # names[0] is the babbling's source
+    fit = dict(latent_dim=experiment["latent_dim"])
+    for star in args.stars:
+        robots = {name: StarRobot(config, name, star) for name in names}
+        pairs = dict(zip(names, babble(config, [robots[name] for name in names], star,
+                                       args.seed)))
+        scratch_errors, experience = {}, {}
+        for name in names:     # each robot's star from scratch: the source's experience
+            scratch_errors[name], experience[name] = robots[name].trials(
+                robots[name].learner(), experiment["n_source_trials"])
+        for target in args.targets:
+            source = next(name for name in names if name != target)
+            n_source = robots[source].params.n_joints
+            models = {"PA": lambda: ProcrustesAnalysis(**fit),
+                      "LPA": lambda: LocalProcrustesAnalysis(
+                          n_min=experiment["n_min"], c_min=experiment["c_min"],
+                          cluster_dims=list(range(2 * n_source)), random_state=0, **fit)}
+            nmse = feature_nmse(models["PA"], pairs[source], pairs[target])
+            print(f"\n{source} -> {target}, {star}, seed {args.seed}: {len(pairs[target])} "
+                  f"pairs; PA held-out nMSE q {nmse[0]:.2f}, q̇ {nmse[1]:.2f}, "
+                  f"q̈ {nmse[2]:.2f}, τ {nmse[3]:.2f}")
+            initial = {"uninitialised": None, "random": pairs[target],
+                       **{f"transfer-{name}": make().fit(pairs[source], pairs[target])
+                          .transfer(experience[source]) for name, make in models.items()},
+                       "oracle": experience[target]}
+            for condition in ("random", "transfer-PA", "transfer-LPA"):
+                distance, by_feature, share, relative = against_own(
+                    robots[target], experience[target], initial[condition])
+                print(f"  {condition:14s} data: median distance to the own star data "
+                      f"{distance:.2f} (q {by_feature[0]:.2f}, q̇ {by_feature[1]:.2f}, "
+                      f"q̈ {by_feature[2]:.2f} alone), {100 * share:.0f} % nearer than 0.5"
+                      + (f"; their torques differ by {relative:.2f} own-torque spreads"
+                         if np.isfinite(relative) else ""))
+            for condition, samples in initial.items():
+                errors = robots[target].trials(robots[target].learner(samples), args.trials)[0]
+                print(f"  {condition:14s} " + " ".join(f"{1e3 * e:6.2f}" for e in errors)
+                      + f"   (scratch after {experiment['n_source_trials']} trials: "
+                      f"{1e3 * scratch_errors[target][-1]:.2f} mm)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
