@@ -68,7 +68,7 @@ class InverseDynamicsLearner(Node):
         self.dt = 1.0 / control_rate
         self.n_steps = max(1, round(self.dt / physics_step))
         pid = PID.from_gains(doubles("pid"))
-        self.trajectory = self.task(doubles)
+        self.trajectory = self.task(declare, doubles)
         self.regressor_spec = (declare("regressor", "lwpr"),
                                json.loads(declare("regressor_params", "{}")))
         if self.regressor_spec[0] == "lwpr":
@@ -92,11 +92,10 @@ class InverseDynamicsLearner(Node):
             f"{control_rate:g} Hz ({self.n_steps} physics steps each), "
             f"regressor {self.regressor_spec[0]}")
 
-    def task(self, doubles):
+    def task(self, declare, doubles):
         """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
         kinematics = robot_kinematics(self.robot, doubles("centre_pose") or None)
         self.centre_pose = kinematics.home
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
         return star_task(kinematics, declare("star_radius", 0.05), self.dt, doubles("star_u"),
                          doubles("star_v"), declare("star_spread", 2 * np.pi),
                          declare("star_start_angle", 0.0))
