@@ -22,14 +22,25 @@ N_FOLDS = 6
 N_MINS = (40, 80, 160, 320)
 
 
+def folds(n_pairs):
+    """The N_FOLDS blocks of consecutive pairs, each held out once."""
+    return np.array_split(np.arange(n_pairs), N_FOLDS)
+
+
+def held_out_predictions(make_model, source, target):
+    """Every target row predicted by a model fitted on the other blocks (:func:`folds`)."""
+    predicted = np.empty_like(target, dtype=np.float64)
+    for fold in folds(len(source)):
+        train = np.setdiff1d(np.arange(len(source)), fold)
+        predicted[fold] = make_model().fit(source[train], target[train]).transfer(source[fold])
+    return predicted
+
+
 def held_out_nmse(make_model, source, target):
     scale = target.var(axis=0)
-    errors = []
-    for fold in np.array_split(np.arange(len(source)), N_FOLDS):
-        train = np.setdiff1d(np.arange(len(source)), fold)
-        predicted = make_model().fit(source[train], target[train]).transfer(source[fold])
-        errors.append(np.mean((predicted - target[fold]) ** 2 / scale))
-    return float(np.mean(errors))
+    predicted = held_out_predictions(make_model, source, target)
+    return float(np.mean([np.mean((predicted[fold] - target[fold]) ** 2 / scale)
+                          for fold in folds(len(source))]))
 
 
 def main(argv):

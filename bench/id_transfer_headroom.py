@@ -11,8 +11,8 @@ star's centre pose, so the pairs of Star 2 differ slightly from the graph's, who
 from where Star 1's babbling left them), then
 
 1. the held-out nMSE of PA on those pairs per feature (q, q̇, q̈, τ; median over the joints the
-   babbling moves), 6 blocks of whole lines each held out once: 1 means no better than
-   predicting the mean;
+   babbling moves), with ``id_mapping_quality.py``'s 6 blocks of whole lines each held out
+   once: 1 means no better than predicting the mean;
 2. the tracking error per trial (mm) of a fresh learner initialised with nothing
    (uninitialised), with the target's own babbling side of the pairs (random), with the
    source's experience of the star from scratch mapped by PA and LPA (transfer-PA/-LPA), and
@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from sklearn.neighbors import NearestNeighbors
 
 from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
 from lpa_transfer.control import PID, start_servo
@@ -39,8 +40,9 @@ from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.simulator import RobotSimulator, robot_urdf
 from lpa_transfer.tasks import star_task
 
+from id_mapping_quality import held_out_predictions   # the same held-out blocks
+
 CONFIG = Path("scenarios/inverse_dynamics/config.yaml")
-N_FOLDS = 6
 MOVING = 1e-3          # a column whose spread is below this is a joint the babbling leaves still
 
 
@@ -104,13 +106,9 @@ def babble(config, robots, star, seed):
 
 def feature_nmse(make_model, source, target):
     """Held-out nMSE per feature group (q, q̇, q̈, τ): the median over the moving joints."""
-    squared = np.zeros(target.shape[1])
-    for fold in np.array_split(np.arange(len(source)), N_FOLDS):
-        train = np.setdiff1d(np.arange(len(source)), fold)
-        predicted = make_model().fit(source[train], target[train]).transfer(source[fold])
-        squared += ((predicted - target[fold]) ** 2).sum(axis=0)
+    squared = ((held_out_predictions(make_model, source, target) - target) ** 2).mean(axis=0)
     spread = target.var(axis=0)
-    nmse = squared / len(source) / np.where(spread > 0, spread, 1.0)
+    nmse = squared / np.where(spread > 0, spread, 1.0)
     n = target.shape[1] // 4
     moving = target[:, :n].std(axis=0) > MOVING
     return [float(np.median(nmse[g * n:(g + 1) * n][moving])) for g in range(4)]
@@ -123,7 +121,6 @@ def against_own(robot, own_experience, samples, near=0.5):
     samples nearer than ``near``, the RMS difference of their torques from that own sample's
     over the spread of the own torques (moving joints). The robot's own exact babbling
     ('random') calibrates the second figure: neighbours ``near`` apart differ that much."""
-    from sklearn.neighbors import NearestNeighbors
     n = robot.params.n_joints
     scale = robot.regressor[1]["norm_in"]
     index = NearestNeighbors(n_neighbors=1).fit(own_experience[:, :3 * n] / scale)
