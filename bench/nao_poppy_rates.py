@@ -6,8 +6,9 @@ learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
 
     nice -n 10 python bench/nao_poppy_rates.py --rates 2 3 4 10 --seeds 0 1
 
-The robots, homes, boxes, test points (200 000 joint samples), threshold, LPA and guard are
-those of nao_poppy.yaml; Nao babbles with its 4 shared joints. The pieces are the library's
+The robots, homes, boxes, test points (200 000 joint samples), threshold, guided
+exploration's target_range, LPA and guard are those of nao_poppy.yaml; Nao babbles with its
+4 shared joints. The pieces are the library's
 (the graph runs the same ones in separate processes, on pybullet): this is kinematic, not
 physical, and its seeds are not the graph's. Not run in CI: one rate and seed takes ~20-60 s.
 Prints, per rate and seed, the reaching rate every 600 s for scratch, guided exploration
@@ -80,14 +81,15 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     scratch = babbler("target", 1).start(arms["target"])
     curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
     guide = babbler("target", 1, home=home[shared["target"]])
-    pairs = guided_exploration(guide, arms["source"], arms["target"], shared["source"],
-                               shared["target"], guided, make_sensorimotor_model(forward=False))
+    guided_pairs = guided_exploration(
+        guide, arms["source"], arms["target"], shared["source"], shared["target"], guided,
+        make_sensorimotor_model(forward=False), params("guided_exploration")["target_range"])
     lpa = LocalProcrustesAnalysis(n_min=experiment["n_min"], c_min=experiment["c_min"],
-                                  random_state=seeds[2]).fit(*pairs)
+                                  random_state=seeds[2]).fit(*guided_pairs.correspondences())
     after = int(round(guided * rate))       # Nao's experience after T_guided (§6.5.2)
     commands, task_points = transfer_experience(
         lpa, np.hstack((q_s[after:, shared["source"]], x_s[after:])), home, shared["target"])
-    own = padded_rows(pairs[1], home, shared["target"])
+    own = padded_rows(guided_pairs.target, home, shared["target"])
     for name in CONDITIONS[1:]:
         model = make_sensorimotor_model(forward=False)
         if name == "LPA-guarded":

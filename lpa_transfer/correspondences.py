@@ -39,7 +39,8 @@ from . import inverse_kinematics
 from ._validation import check_float, check_int
 from .babbling import execute
 from .goal_babbling import check_x_bounds
-from .guided_exploration import guided_exploration, pad_transferred, restrict
+from .guided_exploration import (check_target_range, followed_commands, guided_exploration,
+                                 pad_transferred, restrict)
 from .guided_exploration import shared_limits as shared_joint_limits
 from .kinematics import overlapping_limits
 
@@ -127,6 +128,24 @@ def load_correspondences(path):
             return archive["source"], archive["target"]
         except unreadable as exc:   # a damaged member, object arrays
             raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+
+
+def load_guided_exploration(path):
+    """A guided-exploration file (:func:`collect_guided_correspondences`) as ``(source_pairs,
+    target_pairs, target_experience, followed)``: the correspondences, the target's rows of
+    all N commands and which of them the source followed (N,) bool. A file without the last
+    two (every pair a correspondence) gives ``target_pairs`` and all True."""
+    source, target = load_correspondences(path)
+    with np.load(os.fspath(path), allow_pickle=False) as archive:
+        if "meta_followed" not in archive.files:
+            return source, target, target, np.ones(len(target), dtype=bool)
+        followed = archive["meta_followed"].astype(bool)
+        experience = archive["meta_target_experience"]
+    if followed.shape != (len(experience),) or followed.sum() != len(target):
+        raise ValueError(f"guided-exploration file {path}: {int(followed.sum())} followed "
+                         f"commands of {len(followed)}, {len(experience)} rows of experience "
+                         f"and {len(target)} pairs do not agree")
+    return source, target, experience, followed
 
 
 def shared_limits(source, target):
@@ -265,7 +284,8 @@ def _observing(environment, joints, n_task, should_stop, on_row):
                                execute=run)
 
 
-def check_guided_exploration(babbling, source, target, source_joints, target_joints, seconds):
+def check_guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
+                             target_range="shared"):
     """Check a guided collection's set-up before any robot moves; ValueError if it is bad.
 
     ``source``/``target`` must be kinematic models (their ``forward`` must not run a robot,
@@ -275,13 +295,15 @@ def check_guided_exploration(babbling, source, target, source_joints, target_joi
     """
     check_float(seconds, "seconds", 0)
     limits = shared_joint_limits(source, target, source_joints, target_joints)
+    explored = limits if check_target_range(target_range) == "shared" else None
     kinematic = replace(target, execute=None)
-    copy.copy(babbling).start(restrict(kinematic, target_joints, limits))
+    copy.copy(babbling).start(restrict(kinematic, target_joints, explored))
     return limits
 
 
 def collect_guided_correspondences(babbling, source, target, source_joints, target_joints,
-                                   seconds, on_pair=None, should_stop=None, model=None):
+                                   seconds, on_pair=None, should_stop=None, model=None,
+                                   target_range="shared"):
     """Guided exploration (thesis §6.4.2, Alg. 7) as a correspondence collection.
 
     ``babbling`` is a :class:`lpa_transfer.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
@@ -289,48 +311,59 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
     run on the robots, e.g. :func:`lpa_transfer.robot_environment.stepped_environment`).
     ``source_joints[i]`` of the source is ``target_joints[i]`` of the target (the shared
     joints Q̄). The target goal-babbles for ``seconds`` simulated seconds moving the shared
-    joints only, its other joints at home, learning ``model`` (default: a fresh one; then
-    ``babbling.model_``); the source then executes the same commands, its other joints at
-    its home (:func:`lpa_transfer.guided_exploration.guided_exploration`). Pair i holds each
-    robot's observed row (q̄, x) for command i: the positions its shared joints reached and
-    its task point. ``on_pair(index, source_row, target_row)`` sees each pair as it is made,
-    as the source executes command i. ``should_stop()`` (checked before every command of
-    either robot) ends the collection early: only the commands both robots executed are
-    paired (none while the target is still babbling) and ``complete`` is False.
+    joints only, its other joints at home, within ``target_range`` (``shared`` or ``own``
+    ranges, :mod:`lpa_transfer.guided_exploration`), learning ``model`` (default: a fresh
+    one; then ``babbling.model_``); the source then executes the same commands (clipped into
+    the shared ranges), its other joints at its home
+    (:func:`lpa_transfer.guided_exploration.guided_exploration`). Row i holds each robot's
+    observed (q̄, x) for command i: the positions its shared joints reached and its task
+    point; the pairs of the commands the source followed are the correspondences.
+    ``on_pair(index, source_row, target_row)`` sees each correspondence as it is made, as the
+    source executes command ``index``. ``should_stop()`` (checked before every command of
+    either robot) ends the collection early: only the commands both robots executed count
+    (none while the target is still babbling) and ``complete`` is False.
 
-    Returns a :class:`CorrespondenceSet`: pairing rule ``same_command``, features
-    (``position``, ``ee_x``, …) with ``position`` the shared joints only, ``sim_time`` the
-    source's execution time on goal babbling's clock (pairs / ``steps_per_second``), and the
-    hyperparameters in ``metadata``; robot names are left empty for the caller.
+    Returns a :class:`CorrespondenceSet` of the correspondences: pairing rule
+    ``same_command``, features (``position``, ``ee_x``, …) with ``position`` the shared
+    joints only, ``sim_time`` the source's execution time on goal babbling's clock (commands
+    / ``steps_per_second``), and the hyperparameters in ``metadata``, with ``followed`` (N,)
+    bool and ``target_experience`` (N, d_c + m), the target's rows of all N commands, for
+    :func:`load_guided_exploration`; robot names are left empty for the caller.
     """
     check_float(seconds, "seconds", 0)
-    shared_joint_limits(source, target, source_joints, target_joints)   # before any step
+    check_target_range(target_range)
+    limits = shared_joint_limits(source, target, source_joints, target_joints)  # before a step
     low, high = check_x_bounds(babbling.x_bounds)
     n_task = len(low)
-    target_rows, source_rows = [], []
+    target_rows, source_rows, followed = [], [], []
 
     def on_source_row(row):
         index = len(source_rows)
         source_rows.append(row)
-        if on_pair is not None:
+        followed.append(bool(followed_commands(babbling.commands_[index], limits)[0]))
+        if on_pair is not None and followed[-1]:
             on_pair(index, row, target_rows[index + 1])    # target_rows[0]: its home
 
     try:
         guided_exploration(
             babbling, _observing(source, source_joints, n_task, should_stop, on_source_row),
             _observing(target, target_joints, n_task, should_stop, target_rows.append),
-            source_joints, target_joints, seconds, model)
+            source_joints, target_joints, seconds, model, target_range)
         complete = True
     except _Stopped:
         complete = False
+    source_rows, experience = _rows(source_rows), _rows(target_rows[1:len(source_rows) + 1])
+    followed = np.array(followed, dtype=bool)
     metadata = dict(guided_seconds=float(seconds), x_low=low, x_high=high,
                     source_joints=np.asarray(source_joints),
-                    target_joints=np.asarray(target_joints),
+                    target_joints=np.asarray(target_joints), target_range=target_range,
                     n_subtargets=babbling.n_subtargets, sigma=babbling.sigma,
                     drift=babbling.drift, p_home=babbling.p_home,
-                    steps_per_second=babbling.steps_per_second, seed=babbling.seed)
+                    steps_per_second=babbling.steps_per_second, seed=babbling.seed,
+                    followed=followed, target_experience=experience)
     return CorrespondenceSet(
-        _rows(source_rows), _rows(target_rows[1:len(source_rows) + 1]),
+        source_rows[followed] if len(source_rows) else source_rows,
+        experience[followed] if len(experience) else experience,
         pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],
-        sim_time=len(source_rows) / babbling.steps_per_second, complete=complete,
+        sim_time=len(followed) / babbling.steps_per_second, complete=complete,
         metadata=metadata)

@@ -192,7 +192,7 @@ def _guided_phase(condition, config, babbler, model, seed, evaluate, times):
         evaluate(clone(own).fit(own.X_[:n], own.Y_[:n], own.sample_weight_[:n]), time, 0)
     mapping = ProcrustesAnalysis() if condition.startswith("PA") else \
         LocalProcrustesAnalysis(random_state=derived_seeds(seed)[2], **dict(config.lpa))
-    commands, task_points = transfer_experience(mapping.fit(*pairs),
+    commands, task_points = transfer_experience(mapping.fit(*pairs.correspondences()),
                                                 source_experience(config, seed),
                                                 target.home, [0, 1])
     initialise_with_transfer(model, commands, task_points)

@@ -10,12 +10,22 @@ its other joints at its home (Alg. 7). Pairing the two by command gives the corr
 On simulated robots (:mod:`lpa_transfer.robot_environment`) each side's q̄ is the joint
 positions that robot reached for the command, so the two may differ slightly.
 
-The shared commands are explored within the intersection of both robots' ranges of the
-shared joints, so that both bodies can execute every command exactly (the pairs then really
-share q̄). Transferred source data hold only the d_c shared joints; :func:`pad_transferred`
-completes them with the target's home values for the joints the source lacks (§6.4.1).
+Which range the target explores (``target_range``; Alg. 7 does not say):
+
+* ``"shared"``: the intersection of both robots' ranges of the shared joints, so that both
+  bodies execute every command exactly and every pair is a correspondence.
+* ``"own"``: the target's own ranges. The source executes each command clipped into the
+  shared ranges (as a position-controlled robot clips a command beyond its limits); only the
+  pairs whose command lay inside them are correspondences (``followed``), while every
+  movement stays the target's own experience. Where the target's range is wider (Poppy's
+  elbow bends to 148°, Nao's to 88.5°, §6.5.2), the target then learns that part of its
+  body during guided exploration instead of waiting for it.
+
+Transferred source data hold only the d_c shared joints; :func:`pad_transferred` completes
+them with the target's home values for the joints the source lacks (§6.4.1).
 """
 import dataclasses
+from typing import NamedTuple
 
 import numpy as np
 
@@ -103,21 +113,54 @@ def shared_limits(source, target, source_joints, target_joints):
                               np.asarray(target.joint_limits)[target_joints], "the shared joints")
 
 
+TARGET_RANGES = ("shared", "own")
+
+
+class GuidedPairs(NamedTuple):
+    """What guided exploration observed, one row per movement of the target."""
+
+    source: np.ndarray     # (N, d_c + m) the source's rows (q̄_s, x_s)
+    target: np.ndarray     # (N, d_c + m) the target's rows (q̄_t, x_t): all its own experience
+    followed: np.ndarray   # (N,) bool: the source could execute command i (inside the shared
+    #                        ranges), so row i of both is a correspondence
+
+    def correspondences(self):
+        """``(source_pairs, target_pairs)``: the followed rows only."""
+        return self.source[self.followed], self.target[self.followed]
+
+
+def check_target_range(target_range):
+    """``target_range`` if it is one of :data:`TARGET_RANGES`; ValueError if not."""
+    if target_range not in TARGET_RANGES:
+        raise ValueError(f"target_range must be one of {TARGET_RANGES}, got {target_range!r}")
+    return target_range
+
+
+def followed_commands(commands, limits):
+    """(N,) bool: which commands (N, d_c) lie inside the shared ranges ``limits`` (d_c, 2)."""
+    commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
+    return np.all((commands >= limits[:, 0]) & (commands <= limits[:, 1]), axis=1)
+
+
 def guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
-                       model=None):
-    """Alg. 7 with the target's goal babbling: ``(source_pairs, target_pairs)``, each
-    (N, d_c + m) rows (q̄, x) with the same q̄ in row i of both.
+                       model=None, target_range="shared"):
+    """Alg. 7 with the target's goal babbling: a :class:`GuidedPairs` of (N, d_c + m) rows
+    (q̄, x), the same command behind row i of both.
 
     ``babbling`` is a :class:`lpa_transfer.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
     target's task space, its ``home`` None or over the shared joints); it explores the target
     restricted to ``target_joints`` for ``seconds`` simulated seconds, learning ``model``
-    (default: a fresh one; afterwards ``babbling.model_``). The source then executes the
-    commands with its ``source_joints``.
+    (default: a fresh one; afterwards ``babbling.model_``), within the ranges ``target_range``
+    names (module docstring). The source then executes the commands, clipped into the
+    shared ranges, with its ``source_joints``.
     """
     limits = shared_limits(source, target, source_joints, target_joints)
-    babbling.start(restrict(target, target_joints, limits), model)
+    explored = limits if check_target_range(target_range) == "shared" else None
+    babbling.start(restrict(target, target_joints, explored), model)
     target_joint_values, target_points = babbling.run_for(seconds)
-    source_joint_values, source_points = execute(restrict(source, source_joints, limits),
-                                                 babbling.commands_)
-    return np.hstack((source_joint_values, source_points)), \
-        np.hstack((target_joint_values, target_points))
+    commands = babbling.commands_
+    source_joint_values, source_points = execute(
+        restrict(source, source_joints, limits), np.clip(commands, limits[:, 0], limits[:, 1]))
+    return GuidedPairs(np.hstack((source_joint_values, source_points)),
+                       np.hstack((target_joint_values, target_points)),
+                       followed_commands(commands, limits))

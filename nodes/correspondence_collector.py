@@ -46,7 +46,11 @@ Parameters:
   babbling time), ``x_low``/``x_high`` (double arrays, required: X_bounds, the box of the
   target's goals in its task space), ``source_joints``/``target_joints`` (int arrays: the
   shared joints, ``source_joints[i]`` is ``target_joints[i]``; default the first
-  min(n_s, n_t) joints of each), ``n_subtargets`` (T, 10), ``sigma`` (0.1) and ``drift``
+  min(n_s, n_t) joints of each), ``target_range`` (``shared``, default: the target explores
+  within both robots' ranges of the shared joints; ``own``: within its own, and only the
+  commands the source could follow are pairs, see :mod:`lpa_transfer.guided_exploration`;
+  the file then also holds the target's rows of every command, ``meta_target_experience``,
+  and ``meta_followed``), ``n_subtargets`` (T, 10), ``sigma`` (0.1) and ``drift``
   (0.01) of the exploration noise, ``p_home`` (0.1, returns home), ``steps_per_second``
   (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.GoalBabbling`;
   ``seed`` seeds it and ``steps_per_sample`` is the physics steps of one movement step (e.g.
@@ -218,9 +222,10 @@ class CorrespondenceCollector(Node):
         self.babbling = GoalBabbling(
             tuple(tuple(bound) for bound in x_bounds), seed=seed,
             **{name: declare(name, default) for name, default in GOAL_BABBLING_FIELDS.items()})
+        self.target_range = declare("target_range", "shared")
         check_guided_exploration(self.babbling, self.kinematics["source"],
                                  self.kinematics["target"], self.joints["source"],
-                                 self.joints["target"], self.guided_seconds)
+                                 self.joints["target"], self.guided_seconds, self.target_range)
 
     # -- talking to the robots and the mapping service ---------------------------------------
     def call(self, client, request):
@@ -295,7 +300,7 @@ class CorrespondenceCollector(Node):
         pairs = collect_guided_correspondences(
             babbling, environments["source"], environments["target"], self.joints["source"],
             self.joints["target"], self.guided_seconds, on_pair=self.publish_pair,
-            should_stop=self.stop.is_set)
+            should_stop=self.stop.is_set, target_range=self.target_range)
         pairs.metadata.update(program=GUIDED)
         return pairs
 

@@ -15,6 +15,7 @@ from lpa_transfer.correspondences import (DEFAULT_FEATURES, FEATURES,
                                           collect_correspondences,
                                           collect_guided_correspondences, feature_names,
                                           feature_vector, load_correspondences,
+                                          load_guided_exploration,
                                           planned_commands, run_commands)
 from lpa_transfer.kinematics import domain_data, end_effector_rmse
 from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
@@ -581,3 +582,53 @@ def test_check_guided_exploration_finds_what_would_fail_on_the_robots(babbling, 
     with pytest.raises(ValueError, match=message):
         check_guided_exploration(babbling, source, target, [0, 1], [0, 1], 10.0)
     assert not hasattr(babbling, "model_")                  # the given one is not started
+
+
+def wide_shouldered_target():
+    """The Table 6.1 target with a shoulder that also turns up to +0.6 rad, where the source's
+    stops at 0 (a target with a wider range of a shared joint, as Poppy's elbow)."""
+    params = robot("goal_babbling_target")
+    limits = np.array(params.joint_limits, dtype=np.float64)
+    limits[0, 1] = 0.6
+    return Kinematics(limits, np.array(GB_HOME),
+                      lambda q: planar_forward_kinematics(q, params.link_lengths))
+
+
+def test_guided_collection_in_the_targets_own_ranges_keeps_its_whole_experience(tmp_path):
+    """target_range 'own': pairs (and on_pair) only for the commands the source followed;
+    the file also holds the target's rows of every command, which load_guided_exploration
+    gives back with the followed mask."""
+    source = planar_kinematics(robot("goal_babbling_source"), GB_HOME)
+    seen = []
+    upper_box = ((0.3, 0.0), (1.1, 0.9))      # goals above the source's reach: shoulder > 0
+    pairs = collect_guided_correspondences(
+        GoalBabbling(upper_box, seed=2), source, wide_shouldered_target(), [0, 1], [0, 1],
+        120.0, on_pair=lambda index, *rows: seen.append(index), target_range="own")
+    followed, experience = pairs.metadata["followed"], pairs.metadata["target_experience"]
+    assert experience.shape == (1200, 4) and pairs.sim_time == pytest.approx(120.0)
+    assert pairs.metadata["target_range"] == "own"
+    assert 0.05 < 1 - followed.mean() < 0.9           # it went where the source cannot
+    np.testing.assert_array_equal(followed, experience[:, 0] <= 0.0)
+    assert seen == np.flatnonzero(followed).tolist()
+    np.testing.assert_array_equal(pairs.target, experience[followed])
+    np.testing.assert_array_equal(pairs.source[:, :2], pairs.target[:, :2])
+    pairs.save(tmp_path / "guided.npz")
+    source_pairs, target_pairs, loaded_experience, loaded_followed = \
+        load_guided_exploration(tmp_path / "guided.npz")
+    np.testing.assert_array_equal(source_pairs, pairs.source)
+    np.testing.assert_array_equal(target_pairs, pairs.target)
+    np.testing.assert_array_equal(loaded_experience, experience)
+    np.testing.assert_array_equal(loaded_followed, followed)
+    assert load_correspondences(tmp_path / "guided.npz")[0].shape == pairs.source.shape
+    # a file of pairs only (shared ranges, older files): every row followed
+    np.savez(tmp_path / "plain.npz", source=pairs.source, target=pairs.target)
+    *_, plain_experience, plain_followed = load_guided_exploration(tmp_path / "plain.npz")
+    np.testing.assert_array_equal(plain_experience, pairs.target)
+    assert plain_followed.all() and len(plain_followed) == len(pairs.target)
+    np.savez(tmp_path / "bad.npz", source=pairs.source, target=pairs.target,
+             meta_followed=np.ones(1200, dtype=bool), meta_target_experience=experience)
+    with pytest.raises(ValueError, match="do not agree"):
+        load_guided_exploration(tmp_path / "bad.npz")
+    with pytest.raises(ValueError, match="target_range must be one of"):
+        check_guided_exploration(GoalBabbling(GB_BOUNDS), source, wide_shouldered_target(),
+                                 [0, 1], [0, 1], 10.0, target_range="all")

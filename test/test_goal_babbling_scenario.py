@@ -117,12 +117,18 @@ def test_nao_poppy_transfers_nao_experience_after_guided_exploration(nao_poppy_r
 
 def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
     """Guided exploration pairs (q̄, x) with q̄ Poppy's joints 1-4 and Nao's 0-3 (7-D rows);
-    each side's task point is its own arm's, the other joints at home."""
+    each side's task point is its own arm's, the other joints at home. Poppy explores its own
+    ranges (target_range own): the file holds its rows of all 80 commands (20 s, 4 a second),
+    the pairs are those of the commands Nao could follow."""
     with np.load(nao_poppy_run / "guided_0.npz") as pairs:
         source, target = pairs["source"], pairs["target"]
-    assert source.shape == target.shape == (80, 7)   # 20 s, 4 a second
+        followed, experience = pairs["meta_followed"], pairs["meta_target_experience"]
+        assert str(pairs["meta_target_range"]) == "own"
+    assert experience.shape == (80, 7) and followed.shape == (80,)
+    assert source.shape == target.shape == (followed.sum(), 7) and followed.sum() >= 40
+    np.testing.assert_array_equal(target, experience[followed])
     for rows, name, home, joints in ((source, "nao", [0.2, -0.7, 0.4, 1.3, 0.0], [0, 1, 2, 3]),
-                                     (target, "poppy", [0.0, 0.2, -0.7, 0.4, 1.3],
+                                     (experience, "poppy", [0.0, 0.2, -0.7, 0.4, 1.3],
                                       [1, 2, 3, 4])):
         robot = load_robot_params(ROOT / "scenarios" / "robots" / f"{name}_right_arm.toml")
         q = np.tile(home, (len(rows), 1))
@@ -131,7 +137,7 @@ def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
         np.testing.assert_allclose(rows[:, 4:], robot_kinematics(robot).forward(q), atol=1e-4)
     assert np.median(np.abs(source[:, :4] - target[:, :4])) < 0.02    # the same commands
     topics = summary(nao_poppy_run / "run.mcap")
-    assert topics["/correspondences"].message_count == 80
+    assert topics["/correspondences"].message_count == followed.sum()
     # Nao babbles with its 4 shared joints (active_joints): its wrist never leaves home
     from rclpy.serialization import deserialize_message
     from sensor_msgs.msg import JointState

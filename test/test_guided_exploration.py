@@ -84,8 +84,9 @@ def test_shared_limits_intersect_the_ranges():
 def test_guided_exploration_pairs_share_their_commands_table_6_1():
     source, target = table_6_1_arm(GB_SOURCE_LINKS), table_6_1_arm(GB_TARGET_LINKS)
     babbler = GoalBabbling(GB_TARGET_BOUNDS, seed=3)
-    source_pairs, target_pairs = guided_exploration(babbler, source, target, [0, 1], [0, 1],
-                                                    seconds=20)
+    source_pairs, target_pairs, followed = guided_exploration(babbler, source, target, [0, 1],
+                                                              [0, 1], seconds=20)
+    assert followed.all()            # within the shared ranges, every pair corresponds
     assert source_pairs.shape == target_pairs.shape == (200, 4)
     commands = target_pairs[:, :2]
     np.testing.assert_array_equal(source_pairs[:, :2], commands)
@@ -98,8 +99,9 @@ def test_guided_exploration_pairs_share_their_commands_table_6_1():
 def test_guided_exploration_holds_the_target_only_joints_at_home():
     source, target = table_6_1_arm(GB_SOURCE_LINKS), torso_arm()
     babbler = GoalBabbling(((0.0, -1.2), (1.3, 0.6)), seed=0)
-    source_pairs, target_pairs = guided_exploration(babbler, source, target, [0, 1], [1, 2],
-                                                    seconds=10)
+    source_pairs, target_pairs, followed = guided_exploration(babbler, source, target, [0, 1],
+                                                              [1, 2], seconds=10)
+    assert followed.all()
     commands = target_pairs[:, :2]
     np.testing.assert_array_equal(source_pairs[:, :2], commands)
     limits = shared_limits(source, target, [0, 1], [1, 2])
@@ -108,3 +110,31 @@ def test_guided_exploration_holds_the_target_only_joints_at_home():
     np.testing.assert_array_equal(padded[:, 0], 0.3)
     np.testing.assert_allclose(target_pairs[:, 2:], target.forward(padded))
     np.testing.assert_allclose(source_pairs[:, 2:], source.forward(commands))
+
+
+def test_guided_exploration_in_the_targets_own_ranges_pairs_what_the_source_follows():
+    """target_range 'own': the target explores its whole range of the shared joints (its
+    first shared joint reaches 0.3 rad, the source's only 0); the source executes the
+    commands clipped into its range, and only the commands it could follow are pairs."""
+    source, target = table_6_1_arm(GB_SOURCE_LINKS), torso_arm()
+    guided = guided_exploration(GoalBabbling(((0.0, -1.2), (1.3, 0.6)), seed=0), source,
+                                target, [0, 1], [1, 2], seconds=60, target_range="own")
+    limits = shared_limits(source, target, [0, 1], [1, 2])
+    commands = guided.target[:, :2]
+    assert commands[:, 0].max() > 0.05 and (commands[:, 0] <= 0.3).all()   # its own range
+    inside = ((commands >= limits[:, 0]) & (commands <= limits[:, 1])).all(axis=1)
+    np.testing.assert_array_equal(guided.followed, inside)
+    assert 0.1 < inside.mean() < 0.95
+    np.testing.assert_array_equal(guided.source[:, :2],
+                                  np.clip(commands, limits[:, 0], limits[:, 1]))
+    np.testing.assert_allclose(guided.source[:, 2:], source.forward(guided.source[:, :2]))
+    source_pairs, target_pairs = guided.correspondences()
+    assert len(source_pairs) == inside.sum()
+    np.testing.assert_array_equal(source_pairs[:, :2], target_pairs[:, :2])
+    # the same seed in the shared ranges explores less of the target's body
+    shared = guided_exploration(GoalBabbling(((0.0, -1.2), (1.3, 0.6)), seed=0), source,
+                                target, [0, 1], [1, 2], seconds=60)
+    assert shared.followed.all() and shared.target[:, 0].max() <= 0.0
+    with pytest.raises(ValueError, match="target_range must be one of"):
+        guided_exploration(GoalBabbling(((0.0, -1.2), (1.3, 0.6))), source, target, [0, 1],
+                           [1, 2], seconds=1, target_range="wide")

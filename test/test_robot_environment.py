@@ -51,8 +51,9 @@ def test_guided_exploration_pairs_each_robots_own_observations():
     target_kinematics, target, target_sim = simulated("target")
     with source_sim, target_sim:
         babbling = GoalBabbling(BOUNDS, seed=1)
-        source_pairs, target_pairs = guided_exploration(babbling, source, target, [0, 1],
-                                                        [0, 1], 20.0)
+        source_pairs, target_pairs, followed = guided_exploration(babbling, source, target,
+                                                                  [0, 1], [0, 1], 20.0)
+    assert followed.all()                                # the same ranges: all are pairs
     assert source_pairs.shape == target_pairs.shape == (200, 4)
     np.testing.assert_allclose(source_pairs[:, 2:], source_kinematics.forward(source_pairs[:, :2]),
                                atol=1e-6)

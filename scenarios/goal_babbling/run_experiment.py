@@ -9,21 +9,23 @@ position mode (``/source``, ``/target``), a goal_babbling_learner for the source
 ``/target/guarded_learner`` with the guard against negative transfer), ``lpa_mapping`` and the
 recorder; correspondence_collector has run guided exploration (Alg. 7) for every seed, for the
 longest T_guided, and saved the pairs (one file per seed, in the order of ``seeds``). A
-shorter T_guided uses the first T_guided · steps_per_second pairs: with the same seed and the
-robots reset to home the collection is deterministic, so that prefix is what a shorter run
-would have collected.
+shorter T_guided uses the first T_guided · steps_per_second commands: with the same seed and
+the robots reset to home the collection is deterministic, so that prefix is what a shorter
+run would have collected. (With the collector's ``target_range: own`` the file also holds
+the target's rows of the commands the source could not follow: they are the target's own
+experience but not correspondences.)
 
 For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling_experiment.derived_seeds`):
 
 1. The source goal-babbles for ``source_seconds`` from scratch; its experience ξ_s is kept.
 2. ``scratch``: the target goal-babbles for ``total_seconds``, evaluated every ``interval`` s.
 3. For every T_guided and method (PA, LPA): the mapping service fits the method on the first
-   T_guided s of guided-exploration pairs (q̄, x_s) -> (q̄, x_t); ξ_s is transferred through it
-   (with ``transfer_from_guided``, only the part the source babbled after T_guided, as
-   §6.5.2 transfers Nao's data from 600 s to 5000 s) and padded with the target's home for
-   joints the source lacks (§6.4.1); the target learner
-   is reset and initialised with its own guided samples and the transferred ones, its clock at
-   T_guided, and goal-babbles for the rest of ``total_seconds`` (with a seed of its own: the
+   T_guided s of guided-exploration correspondences (q̄, x_s) -> (q̄, x_t); ξ_s is
+   transferred through it (with ``transfer_from_guided``, only the part the source babbled
+   after T_guided, as §6.5.2 transfers Nao's data from 600 s to 5000 s) and padded with the
+   target's home for joints the source lacks (§6.4.1); the target learner is reset and
+   initialised with its own guided samples (every command's) and the transferred ones, its
+   clock at T_guided, and goal-babbles for the rest of ``total_seconds`` (with a seed of its own: the
    learner restarts its babbler, and the guided exploration's goals should not repeat).
    With ``guarded``, the same again on the guarded learner.
 
@@ -47,7 +49,7 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.babbling import robot_kinematics  # noqa: E402
-from lpa_transfer.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.correspondences import load_guided_exploration  # noqa: E402
 from lpa_transfer.goal_babbling_experiment import derived_seeds  # noqa: E402
 from lpa_transfer.kinematics import sample_joint_uniform  # noqa: E402
 from lpa_transfer.learning_curves import time_saved  # noqa: E402
@@ -151,15 +153,18 @@ class Experiment(Node):
                                    f"samples")
             self.record(curves, "scratch", self.learn("/target/learner", target_seed,
                                                       self.total_seconds))
-            all_source_pairs, all_target_pairs = load_correspondences(pair_file)
+            all_source_pairs, all_target_pairs, guided_experience, followed = \
+                load_guided_exploration(pair_file)
             for guided in self.guided_seconds:
-                n_pairs = int(round(guided * self.steps_per_second))
-                if n_pairs > len(all_source_pairs):
-                    raise ValueError(f"{pair_file} holds {len(all_source_pairs)} pairs, fewer "
-                                     f"than T_guided = {guided:g} s needs ({n_pairs})")
+                n_commands = int(round(guided * self.steps_per_second))
+                if n_commands > len(guided_experience):
+                    raise ValueError(f"{pair_file} holds {len(guided_experience)} commands, "
+                                     f"fewer than T_guided = {guided:g} s needs ({n_commands})")
+                n_pairs = int(followed[:n_commands].sum())    # the correspondences among them
                 source_pairs, target_pairs = (all_source_pairs[:n_pairs],
                                               all_target_pairs[:n_pairs])
-                experience = source_experience[n_pairs if self.transfer_from_guided else 0:]
+                own = guided_experience[:n_commands]
+                experience = source_experience[n_commands if self.transfer_from_guided else 0:]
                 for method in self.methods:
                     model_id = f"seed{seed}/T{guided:g}/{method}"
                     fields = dict(self.fit, random_state=lpa_seed) if method == "lpa" else {}
@@ -173,7 +178,7 @@ class Experiment(Node):
                         name = f"{method.upper()}{'-guarded' if guarded else ''}/T{guided:g}"
                         self.record(curves, name, self.learn(
                             learner, after_transfer_seed, self.total_seconds - guided,
-                            own=self.padded(target_pairs), transferred=transferred,
+                            own=self.padded(own), transferred=transferred,
                             elapsed=guided))
             self.seeds_done.append(seed)
             write_outputs(curves, self, self.output_dir)
