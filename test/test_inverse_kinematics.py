@@ -218,7 +218,7 @@ def test_solve_many_ends_where_solve_does_row_by_row(name):
     for i in range(len(targets)):
         q, residual = solve(forward, targets[i], starts[i], limits)
         np.testing.assert_allclose(Q[i], q, atol=1e-6)    # batched linear algebra rounds
-        assert residuals[i] == pytest.approx(residual, abs=1e-9)   # differently
+        assert residuals[i] == pytest.approx(residual, abs=1e-6)   # differently; q agrees to 1e-6
     assert (residuals[:20] < 1e-7).all() and (residuals[20:30] > 0.1 * (l1 + l2)).all()
 
 
