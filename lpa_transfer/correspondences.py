@@ -39,8 +39,8 @@ from . import inverse_kinematics
 from ._validation import check_float, check_int
 from .babbling import execute
 from .goal_babbling import check_x_bounds
-from .guided_exploration import (check_target_range, followed_commands, guided_exploration,
-                                 pad_transferred, restrict)
+from .guided_exploration import (check_target_range, explored_target, followed_commands,
+                                 guided_exploration, pad_transferred, restrict)
 from .guided_exploration import shared_limits as shared_joint_limits
 from .kinematics import overlapping_limits
 
@@ -295,9 +295,8 @@ def check_guided_exploration(babbling, source, target, source_joints, target_joi
     """
     check_float(seconds, "seconds", 0)
     limits = shared_joint_limits(source, target, source_joints, target_joints)
-    explored = limits if check_target_range(target_range) == "shared" else None
     kinematic = replace(target, execute=None)
-    copy.copy(babbling).start(restrict(kinematic, target_joints, explored))
+    copy.copy(babbling).start(explored_target(kinematic, target_joints, limits, target_range))
     return limits
 
 
@@ -362,8 +361,7 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
                     steps_per_second=babbling.steps_per_second, seed=babbling.seed,
                     followed=followed, target_experience=experience)
     return CorrespondenceSet(
-        source_rows[followed] if len(source_rows) else source_rows,
-        experience[followed] if len(experience) else experience,
+        source_rows[followed], experience[followed],
         pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],
         sim_time=len(followed) / babbling.steps_per_second, complete=complete,
         metadata=metadata)

@@ -136,6 +136,13 @@ def check_target_range(target_range):
     return target_range
 
 
+def explored_target(target, target_joints, limits, target_range):
+    """The target (a Kinematics) as guided exploration babbles it: only ``target_joints``
+    free, within the shared ranges ``limits`` (``"shared"``) or its own (``"own"``)."""
+    explored = limits if check_target_range(target_range) == "shared" else None
+    return restrict(target, target_joints, explored)
+
+
 def followed_commands(commands, limits):
     """(N,) bool: which commands (N, d_c) lie inside the shared ranges ``limits`` (d_c, 2)."""
     commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
@@ -155,8 +162,7 @@ def guided_exploration(babbling, source, target, source_joints, target_joints, s
     shared ranges, with its ``source_joints``.
     """
     limits = shared_limits(source, target, source_joints, target_joints)
-    explored = limits if check_target_range(target_range) == "shared" else None
-    babbling.start(restrict(target, target_joints, explored), model)
+    babbling.start(explored_target(target, target_joints, limits, target_range), model)
     target_joint_values, target_points = babbling.run_for(seconds)
     commands = babbling.commands_
     source_joint_values, source_points = execute(
