@@ -18,6 +18,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
@@ -58,28 +59,23 @@ def setting():
     return robots, arms, boxes, params("experiment")
 
 
-def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
+def prepare(rate, seed, total=5000.0, guided=600.0):
+    """Everything before the target's curves, for one rate and seed: a namespace of the arms,
+    boxes, robots, shared joints, test points, threshold, the target home, the derived seeds,
+    a ``babbler(side, stream, **kw)`` factory, the guided pairs, and Nao's experience after
+    T_guided transferred by LPA (``commands``, ``task_points``)."""
     robots, arms, boxes, experiment = setting()
     shared = {side: experiment[f"{side}_joints"] for side in ("source", "target")}
     home = np.asarray(params("/target/learner")["home"])
     points = evaluation_points(arms["target"], boxes["target"], spacing=0.05,
                                n_joint_samples=200000)
-    threshold = experiment["reaching_threshold"]
     seeds = [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
 
     def babbler(side, stream, **kw):
         return GoalBabbling(boxes[side], seed=seeds[stream], steps_per_second=rate, **kw)
 
-    def curve(babbling, model, start):
-        rates = []
-        babbling.run_for(total - start, lambda b: rates.append(evaluate_reaching(
-            model.inverse, arms["target"], points, threshold).rate), interval)
-        return rates
-
     nao = babbler("source", 0).start(hold_at_home(arms["source"], shared["source"]))
     q_s, x_s = nao.run_for(total)
-    scratch = babbler("target", 1).start(arms["target"])
-    curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
     guide = babbler("target", 1, home=home[shared["target"]])
     guided_pairs = guided_exploration(
         guide, arms["source"], arms["target"], shared["source"], shared["target"], guided,
@@ -89,14 +85,33 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     after = int(round(guided * rate))       # Nao's experience after T_guided (§6.5.2)
     commands, task_points = transfer_experience(
         lpa, np.hstack((q_s[after:, shared["source"]], x_s[after:])), home, shared["target"])
-    own = padded_rows(guided_pairs.target, home, shared["target"])
+    return SimpleNamespace(robots=robots, arms=arms, boxes=boxes, shared=shared, home=home,
+                points=points, threshold=experiment["reaching_threshold"], seeds=seeds,
+                babbler=babbler, guided_pairs=guided_pairs, commands=commands,
+                task_points=task_points)
+
+
+def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
+    setup = prepare(rate, seed, total, guided)
+    arms, points, threshold, babbler = setup.arms, setup.points, setup.threshold, setup.babbler
+
+    def curve(babbling, model, start):
+        rates = []
+        babbling.run_for(total - start, lambda b: rates.append(evaluate_reaching(
+            model.inverse, arms["target"], points, threshold).rate), interval)
+        return rates
+
+    scratch = babbler("target", 1).start(arms["target"])
+    curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
+    own = padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"])
     for name in CONDITIONS[1:]:
         model = make_sensorimotor_model(forward=False)
         if name == "LPA-guarded":
-            model = GuardedModel(model, lipschitz=chain_lipschitz(robots["target"].link_lengths))
+            model = GuardedModel(model, lipschitz=chain_lipschitz(
+                setup.robots["target"].link_lengths))
         model.update(*own)
         if name != "guided only":
-            initialise_with_transfer(model, commands, task_points)
+            initialise_with_transfer(model, setup.commands, setup.task_points)
         first = evaluate_reaching(model.inverse, arms["target"], points, threshold).rate
         curves[name] = [first] + curve(babbler("target", 3).start(arms["target"], model),
                                        model, guided)

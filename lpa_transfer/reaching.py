@@ -69,6 +69,30 @@ def evaluation_points(environment, x_bounds=None, spacing=0.05, tolerance=0.01,
     return np.reshape(kept, (len(kept), reached.shape[1]))
 
 
+def coverage(points, reached, radius):
+    """Share of the test ``points`` (N, m) within ``radius`` of some ``reached`` position
+    (M, m): the reaching rate at threshold ``radius`` that an inverse model could at best
+    attain if it only ever commanded the poses that gave ``reached`` (a ceiling on what data
+    confined to those positions can teach)."""
+    points, reached = check.as_matrix(points, "points"), check.as_matrix(reached, "reached")
+    check.check_float(radius, "radius", 0)
+    if not len(points) or not len(reached) or points.shape[1] != reached.shape[1]:
+        raise ValueError(f"points and reached must be non-empty with the same width, got "
+                         f"shapes {points.shape} and {reached.shape}")
+    distance, _ = cKDTree(reached).query(points)
+    return float(np.mean(distance <= radius))
+
+
+def reachable_share(environment, points, radius, n_joint_samples=200000, seed=0):
+    """:func:`coverage` of ``points`` by ``environment`` (a Kinematics) within its joint
+    limits, estimated from ``n_joint_samples`` uniform joint samples (seeded): the share of
+    the points it reaches within ``radius`` (from below: a finite sample may miss a point)."""
+    check.check_int(n_joint_samples, "n_joint_samples", 1)
+    joints = sample_joint_uniform(n_joint_samples, np.asarray(environment.joint_limits),
+                                  np.random.default_rng(seed))
+    return coverage(points, np.asarray(environment.forward(joints), dtype=np.float64), radius)
+
+
 def reaching_errors(inverse_model, environment, points):
     """Distances (N,) between test points (N, m) and where ``environment`` (a Kinematics)
     puts its end effector when executing the commands ``inverse_model.predict(points)``

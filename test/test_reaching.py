@@ -1,10 +1,12 @@
 """lpa_transfer.reaching: test points through the reachable workspace, reaching error and rate
 (§6.5), on the Table 6.1 target arm."""
+import dataclasses
+
 import numpy as np
 import pytest
 
-from lpa_transfer.reaching import (Reaching, evaluate_reaching, evaluation_points, grid,
-                                   reaching_errors, reaching_rate)
+from lpa_transfer.reaching import (Reaching, coverage, evaluate_reaching, evaluation_points,
+                                   grid, reachable_share, reaching_errors, reaching_rate)
 from two_link import GB_HOME, GB_TARGET_LINKS, TABLE_6_1_LIMITS, elbow_ik, table_6_1_arm
 
 
@@ -103,3 +105,27 @@ def test_bad_points_and_bounds_raise(target):
         evaluation_points(target, ((0, 0, 0), (1, 1, 1)), n_joint_samples=10)
     with pytest.raises(ValueError, match="spacing must be > 0"):
         grid(((0, 0), (1, 1)), 0.0)
+
+
+def test_coverage_counts_points_near_reached_positions():
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [2.0, 2.0]])
+    reached = np.array([[0.005, 0.0], [1.0, 0.02], [2.0, 2.0]])
+    assert coverage(points, reached, 0.01) == 0.5        # (0, 0) and (2, 2)
+    assert coverage(points, reached, 0.03) == 0.75
+    with pytest.raises(ValueError, match="same width"):
+        coverage(points, np.zeros((2, 3)), 0.01)
+    with pytest.raises(ValueError, match="reached contains NaN"):
+        coverage(points, [[np.nan, 0.0]], 0.01)
+
+
+def test_reachable_share_of_an_arm_and_of_the_same_arm_held_in_a_narrower_range(target,
+                                                                                points):
+    """The whole arm reaches (nearly) all its test points; with its elbow range halved it
+    reaches fewer: the ceiling a source with that range could teach."""
+    assert reachable_share(target, points, 0.02, n_joint_samples=20000) > 0.95
+    limits = np.array(target.joint_limits)
+    limits[1, 1] = limits[1].mean()
+    narrow = dataclasses.replace(target, joint_limits=limits)
+    share = reachable_share(narrow, points, 0.02, n_joint_samples=20000)
+    assert 0.2 < share < 0.8
+    assert share == reachable_share(narrow, points, 0.02, n_joint_samples=20000)   # seeded
