@@ -110,8 +110,9 @@ class CorrespondenceSet:
         os.replace(temporary, path)
 
 
-def load_correspondences(path):
-    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
+def _read_arrays(path, optional=()):
+    """The ``source`` and ``target`` arrays of a correspondence file (``.npz`` with those
+    keys) and a dict of those ``optional`` members it holds, read from one opening."""
     unreadable = (OSError, EOFError, ValueError, zipfile.BadZipFile)   # e.g. a truncated file
     try:
         archive = np.load(os.fspath(path), allow_pickle=False)
@@ -125,9 +126,16 @@ def load_correspondences(path):
             raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
                              f"(has {archive.files})")
         try:
-            return archive["source"], archive["target"]
+            return archive["source"], archive["target"], {
+                key: archive[key] for key in optional if key in archive.files}
         except unreadable as exc:   # a damaged member, object arrays
             raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+
+
+def load_correspondences(path):
+    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
+    source, target, _ = _read_arrays(path)
+    return source, target
 
 
 def load_guided_exploration(path):
@@ -135,12 +143,14 @@ def load_guided_exploration(path):
     target_pairs, target_experience, followed)``: the correspondences, the target's rows of
     all N commands and which of them the source followed (N,) bool. A file without the last
     two (every pair a correspondence) gives ``target_pairs`` and all True."""
-    source, target = load_correspondences(path)
-    with np.load(os.fspath(path), allow_pickle=False) as archive:
-        if "meta_followed" not in archive.files:
-            return source, target, target, np.ones(len(target), dtype=bool)
-        followed = archive["meta_followed"].astype(bool)
-        experience = archive["meta_target_experience"]
+    source, target, extra = _read_arrays(path, ("meta_followed", "meta_target_experience"))
+    if "meta_followed" not in extra:
+        return source, target, target, np.ones(len(target), dtype=bool)
+    if "meta_target_experience" not in extra:
+        raise ValueError(f"guided-exploration file {path} has meta_followed but no "
+                         f"meta_target_experience")
+    followed = extra["meta_followed"].astype(bool)
+    experience = extra["meta_target_experience"]
     if followed.shape != (len(experience),) or followed.sum() != len(target):
         raise ValueError(f"guided-exploration file {path}: {int(followed.sum())} followed "
                          f"commands of {len(followed)}, {len(experience)} rows of experience "

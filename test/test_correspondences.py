@@ -629,6 +629,10 @@ def test_guided_collection_in_the_targets_own_ranges_keeps_its_whole_experience(
              meta_followed=np.ones(1200, dtype=bool), meta_target_experience=experience)
     with pytest.raises(ValueError, match="do not agree"):
         load_guided_exploration(tmp_path / "bad.npz")
+    np.savez(tmp_path / "half.npz", source=pairs.source, target=pairs.target,
+             meta_followed=followed)
+    with pytest.raises(ValueError, match="no meta_target_experience"):
+        load_guided_exploration(tmp_path / "half.npz")
     with pytest.raises(ValueError, match="target_range must be one of"):
         check_guided_exploration(GoalBabbling(GB_BOUNDS), source, wide_shouldered_target(),
                                  [0, 1], [0, 1], 10.0, target_range="all")
