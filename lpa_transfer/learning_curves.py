@@ -28,12 +28,16 @@ def time_to_reach(times, values, level, higher_is_better=True):
     return float(times[np.argmax(reached)]) if reached.any() else float("inf")
 
 
-def time_saved(scratch_times, scratch_values, times, values, higher_is_better=True):
-    """(level, t_scratch, t, saved): the scratch learner's final value, when the scratch
-    curve first reaches it, when the other curve does, and the share of time saved,
-    1 − t / t_scratch (negative when it is slower; −inf when it never gets there)."""
+def time_saved(scratch_times, scratch_values, times, values, higher_is_better=True,
+               level=None):
+    """(level, t_scratch, t, saved): ``level`` (default: the scratch learner's final value),
+    when the scratch curve first reaches it, when the other curve does, and the share of time
+    saved, 1 − t / t_scratch (negative when it is slower; −inf when it never gets there; nan
+    when neither does)."""
     scratch_times, scratch_values = _curve(scratch_times, scratch_values)
-    level = float(scratch_values[-1])
+    level = float(scratch_values[-1]) if level is None else float(level)
     t_scratch = time_to_reach(scratch_times, scratch_values, level, higher_is_better)
     t = time_to_reach(times, values, level, higher_is_better)
-    return level, t_scratch, t, 1.0 - t / t_scratch
+    with np.errstate(invalid="ignore"):
+        saved = 1.0 - t / t_scratch if np.isfinite(t_scratch) else float("nan")
+    return level, t_scratch, t, saved

@@ -25,6 +25,17 @@ def test_time_saved_reads_like_the_thesis_poppy_example():
     assert never == -np.inf
 
 
+def test_time_saved_at_a_given_level():
+    """level: time saved to reach an intermediate rate."""
+    scratch = np.linspace(0.3, 0.81, 17)
+    scratch_times = 300.0 * np.arange(1, 18)     # 0.36 first reached at 900 s
+    level, t_scratch, t, saved = time_saved(scratch_times, scratch, TIMES,
+                                            [0.5, 0.7, 0.79, 0.80, 0.81], level=0.36)
+    assert (level, t_scratch, t) == (0.36, 900.0, 300.0) and saved == pytest.approx(2 / 3)
+    *_, neither = time_saved(scratch_times, scratch, TIMES, [0.5] * 5, level=0.9)
+    assert np.isnan(neither)
+
+
 @pytest.mark.parametrize("times, values", [([1.0, 1.0], [0.1, 0.2]), ([1.0, 2.0], [0.1]),
                                            ([1.0, 2.0], [0.1, np.nan]), ([], [])])
 def test_bad_curves_are_refused(times, values):

@@ -230,7 +230,33 @@ def report_lines(curves, experiment):
               "at that time (0 before its first evaluation)", "",
               "mean reaching rate at every evaluation (learning time in s):",
               f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
-    lines += every_evaluation + ["", experiment.thesis]
+    lines += every_evaluation + [""] + level_lines(curves, times, scratch_rate) + \
+        ["", experiment.thesis]
+    return lines
+
+
+#: Shares of the scratch learner's final rate at which the report also reads time saved.
+LEVEL_SHARES = (0.5, 0.75, 0.9, 1.0)
+
+
+def level_lines(curves, times, scratch_rate):
+    """When each condition's mean rate first reaches shares of scratch's final rate, and the
+    time saved to get there: where in learning transfer helps, not only at the end."""
+    levels = [share * scratch_rate[-1] for share in LEVEL_SHARES]
+    lines = ["first time (s) the mean rate reaches a share of scratch's final rate, and the "
+             "time saved against scratch:",
+             f"{'':<22} " + " ".join(f"{f'{share:.0%} ({level:.2f})':>15}"
+                                     for share, level in zip(LEVEL_SHARES, levels))]
+    for name, runs in curves.items():
+        t, rate, _ = mean_curve(runs, "rate")
+        cells = []
+        for level in levels:
+            _, _, reach, saved = time_saved(times, scratch_rate, t, rate, level=level)
+            text = "never" if np.isinf(reach) else f"{reach:g}"
+            if name != "scratch" and np.isfinite(saved):
+                text += f" ({saved:+.0%})"
+            cells.append(f"{text:>15}")
+        lines.append(f"{name:<22} " + " ".join(cells))
     return lines
 
 
