@@ -8,8 +8,9 @@ The setting is nao_poppy.yaml's, built by bench/nao_poppy_rates.py (4 movements 
 second). Printed, as shares of the test points within the reaching threshold (0.015 m):
 
 - Poppy with all 5 joints, and with its torso at home (Poppy's own ranges of the 4 shared
-  joints), and with its torso at home and the shared joints in the ranges both robots have:
-  estimated from 400 000 uniform joint samples (seed 0) each;
+  joints), and with its torso at home and the shared joints in the ranges both robots have
+  (all four, all but one, only one: which range binds): estimated from 400 000 uniform
+  joint samples (seed 0) each;
 - per seed, Nao's experience from 600 s to 5000 s transferred by LPA: where Poppy's
   kinematics put the transferred commands (what a perfect k-NN over the transferred data
   could reach), where LPA says they are, and the reaching rate of the k-NN model holding the
@@ -33,16 +34,27 @@ N_JOINT_SAMPLES = 400000
 
 def ceilings(setup):
     """(label, share) of the test points Poppy reaches with all joints, torso at home, and
-    torso at home within the shared joints' common ranges."""
+    torso at home within the shared joints' common ranges — all of them, all but one, and
+    only one (which range binds)."""
     target, source = setup.arms["target"], setup.arms["source"]
     joints = setup.shared["target"]
     torso_home = hold_at_home(target, joints)
-    limits = np.array(torso_home.joint_limits)
-    limits[joints] = shared_limits(source, target, setup.shared["source"], joints)
-    both_ranges = dataclasses.replace(torso_home, joint_limits=limits)
+    own = np.array(torso_home.joint_limits)
+    common = own.copy()
+    common[joints] = shared_limits(source, target, setup.shared["source"], joints)
+
+    def within(limits):
+        return dataclasses.replace(torso_home, joint_limits=limits)
+
+    arms = [("all 5 joints", target), ("torso at home", torso_home),
+            ("torso at home, common ranges", within(common))]
+    for joint in joints:
+        all_but, only = common.copy(), own.copy()
+        all_but[joint], only[joint] = own[joint], common[joint]
+        arms += [(f"  common ranges but joint {joint}'s own", within(all_but)),
+                 (f"  own ranges but joint {joint}'s common", within(only))]
     return [(label, reachable_share(arm, setup.points, setup.threshold, N_JOINT_SAMPLES))
-            for label, arm in (("all 5 joints", target), ("torso at home", torso_home),
-                               ("torso at home, common ranges", both_ranges))]
+            for label, arm in arms]
 
 
 def transferred(setup):
