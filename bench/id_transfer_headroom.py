@@ -91,7 +91,8 @@ def babble(config, robots, star, seed):
     own = config[f"/babbling/{star}"]["ros__parameters"]
     k = config["experiment"]["ros__parameters"]["stars"].index(star)
     program = BabblingProgram(common["program"], common["n_segments"],
-                              common["samples_per_segment"], 10 * seed + k)
+                              common["samples_per_segment"], 10 * seed + k,
+                              time_law=common.get("time_law", "linear"))
     kinematics, steps = [], []
     for side, robot in zip(("source", "target"), robots):
         kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
@@ -143,11 +144,12 @@ def against_own(robot, own_experience, samples, near=0.5):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--config", type=Path, default=CONFIG)
     parser.add_argument("--trials", type=int, default=5)
     parser.add_argument("--targets", nargs="+", default=["pincher", "youbot"])
     parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
     args = parser.parse_args(argv)
-    config = yaml.safe_load(CONFIG.read_text())
+    config = yaml.safe_load(args.config.read_text())
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]            # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])
@@ -174,6 +176,9 @@ def main(argv=None):
                        **{f"transfer-{name}": make().fit(pairs[source], pairs[target])
                           .transfer(experience[source]) for name, make in models.items()},
                        "oracle": experience[target]}
+            for name in models:   # the source's experience, then the own babbling (learned last)
+                initial[f"own+transfer-{name}"] = np.vstack((initial[f"transfer-{name}"],
+                                                             pairs[target]))
             for condition in ("random", "transfer-PA", "transfer-LPA"):
                 distance, by_feature, share, relative = against_own(
                     robots[target], experience[target], initial[condition])

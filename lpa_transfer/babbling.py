@@ -15,7 +15,11 @@ the robot's :class:`Kinematics`:
   kinematics (:mod:`lpa_transfer.inverse_kinematics`), warm-started along the path.
 
 Every line starts where the last ended (the first at the robot's home) and holds
-``samples_per_segment`` commands, the last one at the waypoint.
+``samples_per_segment`` commands, the last one at the waypoint. Along a line the commands
+follow a time law: ``"linear"`` (evenly spaced: constant speed, which jumps at every
+waypoint) or ``"minimum_jerk"`` (the star tasks' profile, :func:`lpa_transfer.tasks.minimum_jerk`:
+each line starts and ends at rest). §5.4.1 leaves it open; for inverse-dynamics
+correspondences it decides which accelerations the babbling holds.
 """
 from dataclasses import dataclass
 from typing import Callable
@@ -26,8 +30,10 @@ from . import inverse_kinematics
 from ._validation import check_box, check_int
 from .kinematics import home_pose, planar_forward_kinematics
 from .serial_chain import forward_kinematics
+from .tasks import minimum_jerk
 
 PROGRAMS = ("joint_lines", "task_lines")
+TIME_LAWS = ("linear", "minimum_jerk")
 _TASK_STREAM = 2 ** 20   # seed-sequence key of the task-space waypoints (joints use 0..n-1)
 
 
@@ -105,12 +111,16 @@ def robot_kinematics(robot, home=None):
                       lambda q: forward_kinematics(robot, q))
 
 
-def polyline(start, waypoints, samples_per_segment):
+def polyline(start, waypoints, samples_per_segment, time_law="linear"):
     """Points on the straight lines start → waypoints[0] → waypoints[1] → …:
-    ``samples_per_segment`` per line, evenly spaced, each line's end included."""
+    ``samples_per_segment`` per line, spaced by ``time_law`` (module docstring), each
+    line's end included."""
+    if time_law not in TIME_LAWS:
+        raise ValueError(f"time_law must be one of {TIME_LAWS}, got {time_law!r}")
     waypoints = np.asarray(waypoints, dtype=np.float64)
     starts = np.vstack((start, waypoints[:-1]))
-    fractions = np.arange(1, samples_per_segment + 1) / samples_per_segment
+    fractions = minimum_jerk(samples_per_segment) if time_law == "minimum_jerk" else \
+        np.arange(1, samples_per_segment + 1) / samples_per_segment
     points = starts[:, None] + fractions[None, :, None] * (waypoints - starts)[:, None]
     return points.reshape(-1, waypoints.shape[1])
 
@@ -119,7 +129,8 @@ def polyline(start, waypoints, samples_per_segment):
 class BabblingProgram:
     """Seeded straight-line babbling (module docstring); the fields are its hyperparameters.
 
-    ``task_low``/``task_high`` bound the task-space waypoints of ``"task_lines"``.
+    ``task_low``/``task_high`` bound the task-space waypoints of ``"task_lines"``;
+    ``time_law`` spaces the commands along each line.
     """
 
     program: str = "joint_lines"
@@ -128,10 +139,13 @@ class BabblingProgram:
     seed: int = 0
     task_low: tuple = ()
     task_high: tuple = ()
+    time_law: str = "linear"
 
     def __post_init__(self):
         if self.program not in PROGRAMS:
             raise ValueError(f"program must be one of {PROGRAMS}, got {self.program!r}")
+        if self.time_law not in TIME_LAWS:
+            raise ValueError(f"time_law must be one of {TIME_LAWS}, got {self.time_law!r}")
         check_int(self.n_segments, "n_segments", 1)
         check_int(self.samples_per_segment, "samples_per_segment", 1)
         if self.program == "task_lines" and (len(self.task_low) or len(self.task_high)):
@@ -157,7 +171,7 @@ class BabblingProgram:
         """The joint-space lines scaled to ``joint_limits`` (n, 2), starting at ``start``."""
         limits = np.asarray(joint_limits, dtype=np.float64)
         waypoints = limits[:, 0] + self.unit_waypoints(len(limits)) * (limits[:, 1] - limits[:, 0])
-        return polyline(start, waypoints, self.samples_per_segment)
+        return polyline(start, waypoints, self.samples_per_segment, self.time_law)
 
     def task_points(self, start_point, task_box=None):
         """The task-space lines from ``start_point``: (n_samples, m)."""
@@ -165,7 +179,7 @@ class BabblingProgram:
         if len(start_point) != waypoints.shape[1]:
             raise ValueError(f"task_low/task_high have {waypoints.shape[1]} coordinates but the "
                              f"robot's task space has {len(start_point)}")
-        return polyline(start_point, waypoints, self.samples_per_segment)
+        return polyline(start_point, waypoints, self.samples_per_segment, self.time_law)
 
     def commands(self, kinematics):
         """The robot's joint commands (n_samples, n) for this program."""

@@ -35,7 +35,9 @@ Parameters:
   zero clipped into the limits, robot_sim's default initial pose.
 * ``pairing_rule``: ``same_command`` (default), ``same_time_index`` or ``same_task_point``.
 * ``program``: ``joint_lines`` (default), ``task_lines`` or ``goal_babbling`` (guided
-  exploration, above); ``n_segments`` (20), ``samples_per_segment`` (5), ``steps_per_sample``
+  exploration, above); ``n_segments`` (20), ``samples_per_segment`` (5), ``time_law``
+  (``linear``, default, or ``minimum_jerk``: how the samples are spaced along each line,
+  :mod:`lpa_transfer.babbling`), ``steps_per_sample``
   (physics steps between samples, 400), ``seed`` (0), ``task_low``/``task_high``
   (task_lines' waypoint box, m), ``task_offset`` (same_task_point: the target's task frame
   relative to the source's, m);
@@ -55,7 +57,7 @@ Parameters:
   (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.GoalBabbling`;
   ``seed`` seeds it and ``steps_per_sample`` is the physics steps of one movement step (e.g.
   100 with robot_sim's 1 ms step for 10 steps a second). ``*_task_*``, ``task_offset``,
-  ``features`` and ``n_segments``/``samples_per_segment`` do not apply.
+  ``features``, ``n_segments``/``samples_per_segment`` and ``time_law`` do not apply.
 * ``source_task_halfwidth``, ``target_task_halfwidth`` (m, one value per task coordinate):
   instead of ``*_task_low``/``*_task_high``, babble in the box of this half-width around the
   end effector at ``*_home`` — "in the vicinity" of a task centred there (§5.5.3,
@@ -160,7 +162,7 @@ class CorrespondenceCollector(Node):
             self.declare_guided(seed, gains, bool(features))
         else:
             self.program = BabblingProgram(program, n_segments, samples_per_segment, seed,
-                                           task_low, task_high)
+                                           task_low, task_high, declare("time_law", "linear"))
         self.features = check_features(features or DEFAULT_FEATURES)
         self.output = os.path.expanduser(declare("output", ""))
         self.model_id = declare("model_id", "")

@@ -55,6 +55,23 @@ def test_polyline_with_one_sample_per_segment_is_the_waypoints():
     np.testing.assert_array_equal(polyline([9.0, 9.0], waypoints, 1), waypoints)
 
 
+def test_polyline_minimum_jerk_starts_and_ends_each_line_at_rest():
+    """time_law "minimum_jerk": the same straight lines and waypoints, spaced by
+    s(τ) = 10τ³ − 15τ⁴ + 6τ⁵: small steps at both ends of a line, the largest mid-line."""
+    start, waypoints = np.zeros(2), np.array([[1.0, 0.0], [1.0, 2.0]])
+    linear = polyline(start, waypoints, 20)
+    smooth = polyline(start, waypoints, 20, "minimum_jerk")
+    np.testing.assert_allclose(smooth[19::20], waypoints)
+    np.testing.assert_allclose(smooth[:20, 1], 0.0)       # still on the first line
+    steps = np.linalg.norm(np.diff(np.vstack((start, smooth)), axis=0), axis=1).reshape(2, 20)
+    for line, length in zip(steps, (1.0, 2.0)):
+        assert line[0] < 0.01 * length and line[-1] < 0.01 * length
+        assert line.max() == pytest.approx(length * 1.875 / 20, rel=0.02)  # peak speed 1.875
+    assert not np.allclose(smooth, linear)
+    with pytest.raises(ValueError, match="time_law must be one of"):
+        polyline(start, waypoints, 20, "cubic")
+
+
 # -- home_pose, Kinematics --------------------------------------------------------------------
 def test_home_pose_defaults_to_zero_clipped_into_the_limits():
     limits = [(0.5, 1.0), (-1.0, 1.0), (-2.0, -1.0)]
@@ -193,6 +210,7 @@ def test_task_lines_share_waypoints_across_robots_and_are_seeded():
     (dict(n_segments=2.5), "n_segments must be an integer >= 1"),
     (dict(n_segments=True), "n_segments must be an integer >= 1"),
     (dict(samples_per_segment=0), "samples_per_segment must be an integer >= 1, got 0"),
+    (dict(time_law="linear "), "time_law must be one of"),
     (dict(program="task_lines", task_low=(0.5, 0.0), task_high=(0.4, 1.0)),
      "task_lines needs finite task_low <= task_high"),
     (dict(program="task_lines", task_low=(0.0, 0.0), task_high=(1.0, 1.0, 1.0)),
