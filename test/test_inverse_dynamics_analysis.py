@@ -34,6 +34,9 @@ def test_time_saved_counts_trials_and_babbling_like_the_thesis():
     scratch = 3 * TRIAL_SECONDS
     assert savings["a"]["random"] == pytest.approx(1 - (TRIAL_SECONDS + 2.0) / scratch)
     assert savings["a"]["transfer-LPA"] < 0      # slower than learning from scratch
+    # results written before the own+transfer conditions existed have no such rows
+    assert {row[2] for row in rows} == set(CONDITIONS[:4]) and set(savings["a"]) == {
+        "random", "transfer-PA", "transfer-LPA"}
 
 
 def write_run(path, seeds, offset, settings=SETTINGS):
@@ -62,8 +65,8 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     assert merged["seeds"] == [0, 2, 1] and merged["settings"] == SETTINGS
     report = (tmp_path / "all" / "report.txt").read_text()
     assert "3 seed(s) (0, 2, 1)" in report
-    # per robot: 3 trials from scratch once, 3 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
-    assert f"simulated: {(3 + 27) * 8.4 + 6:.0f} s per robot" in report
+    # per robot: 3 trials from scratch once, 5 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
+    assert f"simulated: {(3 + 45) * 8.4 + 6:.0f} s per robot" in report
     for name in ("learning_curves.csv", "fig5_7_5_8_learning_curves.png", "fig5_6_traces.png"):
         assert (tmp_path / "all" / name).stat().st_size > 0
 

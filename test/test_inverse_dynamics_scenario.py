@@ -14,7 +14,8 @@ from lpa_transfer.serial_chain import forward_kinematics
 from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
-CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
+CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
+              "own+transfer-LPA")
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def test_every_condition_learns_on_both_robots(smoke_run):
         # youBot 7.2 vs 13.0 mm, Pincher 3.5 vs 5.6 mm)
         assert curves[f"{robot}/star1/random"][0][0] < scratch[0]
     with open(smoke_run / "learning_curves.csv") as handle:
-        assert len(list(csv.DictReader(handle))) == 2 * 4 * 2
+        assert len(list(csv.DictReader(handle))) == 2 * 6 * 2
     traces = results["traces"]["youbot/star1"]
     assert [t["trial"] for t in traces] == [1, 2]
     assert np.asarray(traces[0]["actual"]).shape == (840, 3)
@@ -51,9 +52,9 @@ def test_outputs_and_bag(smoke_run):
     report = (smoke_run / "report.txt").read_text()
     assert "training time saved" in report and "thesis: 58.7%" in report
     topics = summary(smoke_run / "run.mcap")
-    # 4 conditions x 2 trials per robot, each published as a TrialResult
-    assert topics["/youbot/trial_result"].message_count == 8
-    assert topics["/pincher/trial_result"].message_count == 8
+    # 6 conditions x 2 trials per robot, each published as a TrialResult
+    assert topics["/youbot/trial_result"].message_count == 12
+    assert topics["/pincher/trial_result"].message_count == 12
     assert topics["/correspondences"].message_count == 3 * 60
     with np.load(smoke_run / "pairs_0_star1.npz") as pairs:
         assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 16)

@@ -16,7 +16,11 @@ fresh learner run for ``n_trials`` trials:
 * ``random``: initialised with the target's own babbling data (its side of the pairs);
 * ``transfer-PA`` / ``transfer-LPA``: initialised with the other robot's experience of the
   same star from scratch (its first ``n_source_trials`` trials), transferred through the
-  mapping service.
+  mapping service;
+* ``own+transfer-PA`` / ``own+transfer-LPA`` (beyond the thesis): the transferred experience
+  and then the target's own babbling data, which it has anyway (it babbled for the
+  correspondences, and that time is charged to every initialised condition). Set beside
+  ``random`` it measures what the transferred knowledge adds to the target's own data.
 
 The outputs are rewritten after every seed, so an interrupted run keeps what it finished.
 
@@ -47,7 +51,8 @@ from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,
 from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
                                           to_matrix, wait_for_services)
 
-CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA")
+CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
+              "own+transfer-LPA")
 SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds")  # in results.json
 TRIAL_SECONDS = 8.4
 THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
@@ -153,6 +158,9 @@ class Experiment(Node):
                         data[f"transfer-{method}"] = self.transfer(
                             f"{source}->{target}/{method.lower()}/seed{seed}",
                             scratch[source, star])
+                    for method in ("PA", "LPA"):   # the own babbling learned last
+                        data[f"own+transfer-{method}"] = np.vstack(
+                            (data[f"transfer-{method}"], pairs[target]))
                     for condition, initial in data.items():
                         errors, _, _ = self.learn(target, star, initial)
                         curves[f"{target}/{star}/{condition}"].append(errors)
@@ -190,23 +198,30 @@ def trials_to_convergence(curve, reference_final, tolerance, stay=True):
     return 1 if len(above) == 0 else int(above[-1]) + 2
 
 
+def conditions_in(curves):
+    """The CONDITIONS that ``curves`` holds, in their order (results written before a
+    condition existed lack it)."""
+    present = {key.rsplit("/", 1)[1] for key in curves}
+    return [c for c in CONDITIONS if c in present]
+
+
 def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=True):
     """Per target robot: trials to convergence per star and condition (mean curves; ``stay``
     as in :func:`trials_to_convergence`), and the training time saved against learning from
     scratch, as §5.5.3 computes it."""
-    rows, savings = [], {}
+    rows, savings, conditions = [], {}, conditions_in(curves)
     for robot in robots:
-        seconds = {c: 0.0 for c in CONDITIONS}
+        seconds = {c: 0.0 for c in conditions}
         for star in stars:
-            mean = {c: np.mean(curves[f"{robot}/{star}/{c}"], axis=0) for c in CONDITIONS}
+            mean = {c: np.mean(curves[f"{robot}/{star}/{c}"], axis=0) for c in conditions}
             final = mean["uninitialised"][-1]
-            for condition in CONDITIONS:
+            for condition in conditions:
                 k = trials_to_convergence(mean[condition], final, tolerance, stay)
                 rows.append((robot, star, condition, k, len(mean[condition])))
                 seconds[condition] += k * TRIAL_SECONDS
-        for condition in CONDITIONS[1:]:
+        for condition in conditions[1:]:
             seconds[condition] += babbling_seconds
-        savings[robot] = {c: 1 - seconds[c] / seconds["uninitialised"] for c in CONDITIONS[1:]}
+        savings[robot] = {c: 1 - seconds[c] / seconds["uninitialised"] for c in conditions[1:]}
     return rows, savings
 
 
@@ -244,12 +259,12 @@ def write_outputs(curves, traces, experiment, out):
              f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
              f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "
              f"within': the first trial within it", "",
-             f"{'target':<9} {'star':<6} {'condition':<14} {'converged':>9} {'first within':>12}"
+             f"{'target':<9} {'star':<6} {'condition':<16} {'converged':>9} {'first within':>12}"
              f"   tracking error (mm, mean ± std over seeds): trial 1, trials 1-5, last"]
     for (r, s, c, k, n), (*_, first, _) in zip(rows, first_rows):
         runs = 1e3 * np.asarray(curves[f"{r}/{s}/{c}"])
         early = runs[:, :5].mean(axis=1)
-        lines.append(f"{r:<9} {s:<6} {c:<14} {k if k <= n else f'> {n}':>9} "
+        lines.append(f"{r:<9} {s:<6} {c:<16} {k if k <= n else f'> {n}':>9} "
                      f"{first if first <= n else f'> {n}':>12}   "
                      f"{runs[:, 0].mean():5.2f} ± {runs[:, 0].std():4.2f}, "
                      f"{early.mean():5.2f} ± {early.std():4.2f}, "
@@ -278,11 +293,12 @@ def plot_curves(curves, experiment, path):
     for row, robot in enumerate(experiment.robots):
         for col, star in enumerate(experiment.stars):
             ax = axes[row, col]
-            for condition in CONDITIONS:
+            for condition in conditions_in(curves):
                 runs = np.asarray(curves[f"{robot}/{star}/{condition}"]) * 1e3
                 trials = np.arange(1, runs.shape[1] + 1)
                 mean, std = runs.mean(axis=0), runs.std(axis=0)
-                line, = ax.plot(trials, mean, marker="o", ms=3, label=condition)
+                line, = ax.plot(trials, mean, marker="o", ms=3, label=condition,
+                                linestyle="--" if condition.startswith("own+") else "-")
                 ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
                                 alpha=0.2)
             ax.set(title=f"{robot} learning {star}", xlabel="trial",
