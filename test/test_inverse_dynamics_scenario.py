@@ -15,6 +15,7 @@ from lpa_transfer.serial_chain import forward_kinematics
 from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
+pytestmark = pytest.mark.timeout(600)   # over setup.cfg's 300 s: each run takes minutes
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")
 
