@@ -86,6 +86,7 @@ def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):
     assert executed_errors(learner, rows, demos[0].x).min() > 0.005
 
 
+@pytest.mark.timeout(1200)   # two runs in one test; one took 305 s on a loaded machine
 def test_accuracy_script_writes_its_tables_and_figure_and_joins_shares(tmp_path):
     """The smoke size end to end for seed 0 and, as a second share, seed 1; --merge joins
     them into what one run over both seeds writes."""
