@@ -38,6 +38,5 @@ def time_saved(scratch_times, scratch_values, times, values, higher_is_better=Tr
     level = float(scratch_values[-1]) if level is None else float(level)
     t_scratch = time_to_reach(scratch_times, scratch_values, level, higher_is_better)
     t = time_to_reach(times, values, level, higher_is_better)
-    with np.errstate(invalid="ignore"):
-        saved = 1.0 - t / t_scratch if np.isfinite(t_scratch) else float("nan")
+    saved = 1.0 - t / t_scratch if np.isfinite(t_scratch) else float("nan")
     return level, t_scratch, t, saved
