@@ -20,14 +20,12 @@ second). Printed, as shares of the test points within the reaching threshold (0.
 import argparse
 import dataclasses
 
-from nao_poppy_rates import prepare  # also puts the project on sys.path
+from nao_poppy_rates import model_after_guided, prepare  # also puts the project on sys.path
 
 import numpy as np  # noqa: E402
 
 from lpa_transfer.guided_exploration import hold_at_home, shared_limits  # noqa: E402
 from lpa_transfer.reaching import coverage, evaluate_reaching, reachable_share  # noqa: E402
-from lpa_transfer.sensorimotor import make_sensorimotor_model  # noqa: E402
-from lpa_transfer.transfer_babbling import initialise_with_transfer, padded_rows  # noqa: E402
 
 N_JOINT_SAMPLES = 400000
 
@@ -60,10 +58,8 @@ def ceilings(setup):
 def transferred(setup):
     """(label, share) for the transferred data of one seed (module docstring)."""
     target = setup.arms["target"]
-    model = make_sensorimotor_model(forward=False)
-    model.update(*padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"]))
-    initialise_with_transfer(model, setup.commands, setup.task_points)
-    rate = evaluate_reaching(model.inverse, target, setup.points, setup.threshold).rate
+    rate = evaluate_reaching(model_after_guided(setup, "LPA").inverse, target, setup.points,
+                             setup.threshold).rate
     return [("transferred commands executed", coverage(
                 setup.points, target.forward(setup.commands), setup.threshold)),
             ("transferred points as mapped", coverage(

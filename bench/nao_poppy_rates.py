@@ -91,6 +91,20 @@ def prepare(rate, seed, total=5000.0, guided=600.0):
                 task_points=task_points)
 
 
+def model_after_guided(setup, condition):
+    """The target's model at T_guided for ``condition`` (one of CONDITIONS[1:]): the guided
+    pairs, and unless "guided only" the transferred data (behind the guard for
+    "LPA-guarded")."""
+    model = make_sensorimotor_model(forward=False)
+    if condition == "LPA-guarded":
+        model = GuardedModel(model, lipschitz=chain_lipschitz(
+            setup.robots["target"].link_lengths))
+    model.update(*padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"]))
+    if condition != "guided only":
+        initialise_with_transfer(model, setup.commands, setup.task_points)
+    return model
+
+
 def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     setup = prepare(rate, seed, total, guided)
     arms, points, threshold, babbler = setup.arms, setup.points, setup.threshold, setup.babbler
@@ -103,15 +117,8 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
 
     scratch = babbler("target", 1).start(arms["target"])
     curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
-    own = padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"])
     for name in CONDITIONS[1:]:
-        model = make_sensorimotor_model(forward=False)
-        if name == "LPA-guarded":
-            model = GuardedModel(model, lipschitz=chain_lipschitz(
-                setup.robots["target"].link_lengths))
-        model.update(*own)
-        if name != "guided only":
-            initialise_with_transfer(model, setup.commands, setup.task_points)
+        model = model_after_guided(setup, name)
         first = evaluate_reaching(model.inverse, arms["target"], points, threshold).rate
         curves[name] = [first] + curve(babbler("target", 3).start(arms["target"], model),
                                        model, guided)
