@@ -155,12 +155,12 @@ class Experiment(Node):
                 for star in self.stars:
                     data = {"random": pairs[target]}
                     for method in ("PA", "LPA"):
-                        data[f"transfer-{method}"] = self.transfer(
+                        transferred = self.transfer(
                             f"{source}->{target}/{method.lower()}/seed{seed}",
                             scratch[source, star])
-                    for method in ("PA", "LPA"):   # the own babbling learned last
-                        data[f"own+transfer-{method}"] = np.vstack(
-                            (data[f"transfer-{method}"], pairs[target]))
+                        data[f"transfer-{method}"] = transferred
+                        data[f"own+transfer-{method}"] = np.vstack(   # own babbling last
+                            (transferred, pairs[target]))
                     for condition, initial in data.items():
                         errors, _, _ = self.learn(target, star, initial)
                         curves[f"{target}/{star}/{condition}"].append(errors)
