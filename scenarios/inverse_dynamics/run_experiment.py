@@ -9,7 +9,9 @@ seed by seed in the order of ``seeds``; a seed's files are joined.
 
 For every seed: PA and LPA models in both directions from that seed's correspondences, fitted
 by the mapping service. For every target robot and star, the conditions of §5.5.3, each a
-fresh learner run for ``n_trials`` trials:
+fresh learner run for ``n_trials`` trials (parameter ``conditions``: which of them run,
+default all; learning from scratch always runs, as every other condition is measured against
+it):
 
 * ``uninitialised``: learning from scratch (the simulation is deterministic, so this curve is
   the same for every seed; it is run once and reused);
@@ -71,6 +73,10 @@ class Experiment(Node):
                          for robot, path in zip(self.robots, files)}
         self.stars = list(declare("stars", ["star1", "star2"]))
         self.seeds = list(declare("seeds", [0]))
+        self.conditions = list(declare("conditions", list(CONDITIONS)))
+        unknown = sorted(set(self.conditions) - set(CONDITIONS))
+        if unknown:
+            raise ValueError(f"unknown conditions {unknown}; known: {list(CONDITIONS)}")
         self.n_trials = declare("n_trials", 20)
         self.n_source_trials = declare("n_source_trials", 15)
         self.fit = dict(latent_dim=declare("latent_dim", 16), n_min=declare("n_min", 40),
@@ -131,8 +137,8 @@ class Experiment(Node):
         wait_for_services([self.client(RunTrials, f"/{r}/{s}/run_trials")
                            for r in self.robots for s in self.stars]
                           + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop)
-        curves = {f"{r}/{s}/{c}": [] for r in self.robots for s in self.stars
-                  for c in CONDITIONS}
+        run = [c for c in CONDITIONS if c == "uninitialised" or c in self.conditions]
+        curves = {f"{r}/{s}/{c}": [] for r in self.robots for s in self.stars for c in run}
         scratch = {}
         for robot in self.robots:
             for star in self.stars:
@@ -155,13 +161,16 @@ class Experiment(Node):
                 for star in self.stars:
                     data = {"random": pairs[target]}
                     for method in ("PA", "LPA"):
+                        if not {f"transfer-{method}", f"own+transfer-{method}"} & set(run):
+                            continue
                         transferred = self.transfer(
                             f"{source}->{target}/{method.lower()}/seed{seed}",
                             scratch[source, star])
                         data[f"transfer-{method}"] = transferred
                         data[f"own+transfer-{method}"] = np.vstack(   # own babbling last
                             (transferred, pairs[target]))
-                    for condition, initial in data.items():
+                    for condition in run[1:]:
+                        initial = data[condition]
                         errors, _, _ = self.learn(target, star, initial)
                         curves[f"{target}/{star}/{condition}"].append(errors)
                         self.get_logger().info(f"seed {seed} {target} {star} {condition}: "
