@@ -16,4 +16,12 @@ export ROS_LOG_DIR=${ROS_LOG_DIR:-$_lpa_root/log/ros}
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
 export MKL_NUM_THREADS=${MKL_NUM_THREADS:-1}
+# OpenBLAS picks its kernels by CPU, and their rounding differs: a learner trial gave 5.18 mm
+# with the Haswell kernels and 5.72 mm with the Prescott ones (measured on 2026-12-03). The
+# online learners amplify such differences, so pin one kernel set (AVX2 + FMA, which most
+# x86-64 hosts have) for results that repeat from one machine to the next.
+if [ -z "${OPENBLAS_CORETYPE:-}" ] && grep -qw avx2 /proc/cpuinfo 2>/dev/null \
+        && grep -qw fma /proc/cpuinfo 2>/dev/null; then
+    export OPENBLAS_CORETYPE=Haswell
+fi
 unset _lpa_root
