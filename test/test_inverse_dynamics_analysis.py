@@ -39,10 +39,10 @@ def test_time_saved_counts_trials_and_babbling_like_the_thesis():
         "random", "transfer-PA", "transfer-LPA"}
 
 
-def write_run(path, seeds, offset, settings=SETTINGS):
+def write_run(path, seeds, offset, settings=SETTINGS, conditions=CONDITIONS):
     curves = {f"{robot}/star1/{condition}": [[offset + seed + trial for trial in (3, 2, 1)]
                                              for seed in seeds]
-              for robot in settings["robots"] for condition in CONDITIONS}
+              for robot in settings["robots"] for condition in conditions}
     trace = {"trial": 1, "desired": [[0.0, 0.0], [1.0, 1.0]], "actual": [[0.0, 0.1], [1.0, 0.9]]}
     path.mkdir()
     (path / "results.json").write_text(json.dumps({
@@ -71,11 +71,36 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
         assert (tmp_path / "all" / name).stat().st_size > 0
 
 
-def test_merging_refuses_repeated_seeds_and_other_settings(tmp_path):
+def test_merging_refuses_a_seed_that_two_runs_give_differently_and_other_settings(tmp_path):
     write_run(tmp_path / "a", [0, 1], 0.0)
-    write_run(tmp_path / "b", [1], 0.0)
-    write_run(tmp_path / "c", [5], 0.0, dict(SETTINGS, n_trials=4))
-    with pytest.raises(ValueError, match="a seed appears in more than one run"):
-        merge([tmp_path / "a", tmp_path / "b"])
-    with pytest.raises(ValueError, match="ran other settings"):
+    write_run(tmp_path / "b", [1], 0.0)       # seed 1 again, the same curves: reproducible
+    write_run(tmp_path / "c", [1], 0.5)       # seed 1 again, other curves
+    write_run(tmp_path / "d", [5], 0.0, dict(SETTINGS, n_trials=4))
+    curves, _, experiment = merge([tmp_path / "a", tmp_path / "b"])
+    assert experiment.done_seeds == [0, 1] and all(len(runs) == 2 for runs in curves.values())
+    with pytest.raises(ValueError, match="a/star1/uninitialised seed 1 differs between runs"):
         merge([tmp_path / "a", tmp_path / "c"])
+    with pytest.raises(ValueError, match="ran other settings"):
+        merge([tmp_path / "a", tmp_path / "d"])
+
+
+def test_merging_runs_of_other_conditions_joins_them_and_checks_the_shared_curves(tmp_path):
+    """A run of the own+transfer conditions joins the reference result of the others (a
+    learning_curves.csv only); learning from scratch, which both ran, must agree."""
+    first = write_run(tmp_path / "a", [0, 1], 0.0, conditions=CONDITIONS[:4])
+    second = write_run(tmp_path / "b", [0, 1], 0.0, conditions=CONDITIONS[:1] + CONDITIONS[4:])
+    assert merge_main(["merge", str(tmp_path / "ref"), str(tmp_path / "a")]) == 0
+    (tmp_path / "ref" / "results.json").unlink()            # keep only the CSV, as committed
+    curves, traces, experiment = merge([tmp_path / "ref", tmp_path / "b"])
+    assert sorted(curves) == sorted({**first, **second}) and experiment.done_seeds == [0, 1]
+    for key, runs in {**first, **second}.items():
+        assert curves[key] == runs
+    assert set(traces) == {("a", "star1"), ("b", "star1")} and experiment.tolerance == 0.1
+    write_run(tmp_path / "c", [0, 1], 1e-9, conditions=CONDITIONS[:1] + CONDITIONS[4:])
+    with pytest.raises(ValueError, match="uninitialised seed 0 differs"):
+        merge([tmp_path / "ref", tmp_path / "c"])
+    write_run(tmp_path / "d", [1], 0.0, conditions=CONDITIONS[:1] + CONDITIONS[4:])
+    with pytest.raises(ValueError, match=r"own\+transfer-PA lacks seed\(s\) \[0\]"):
+        merge([tmp_path / "ref", tmp_path / "d"])
+    with pytest.raises(ValueError, match="at least one run must have a results.json"):
+        merge([tmp_path / "ref"])

@@ -1,14 +1,20 @@
 #!/usr/bin/env python3
-"""Join the results of chapter 5 runs that each ran a share of the seeds.
+"""Join the results of chapter 5 runs that each ran a share of the seeds or of the conditions.
 
 Usage: ``python scenarios/inverse_dynamics/merge_results.py OUT_DIR RUN_DIR...``
 
 Each RUN_DIR holds the ``results.json`` of one ``run.sh`` (e.g. two graphs on two ROS
-domains, ``--override`` files with seeds [0, 2, 4, ...] and [1, 3, 5, ...]). The runs must
-share their settings (robots, stars, trials, convergence rule) and not repeat a seed. OUT_DIR
-receives the same outputs as one run over all the seeds: results.json, learning_curves.csv,
-the figures and report.txt.
+domains, ``--override`` files with seeds [0, 2, 4, ...] and [1, 3, 5, ...], or with other
+``conditions``), or only the ``learning_curves.csv`` of one (a reference result). The runs
+must share their settings (robots, stars, trials, convergence rule; a CSV holds only the
+first three). A curve that more than one run holds (learning from scratch, which every run
+repeats, or a seed run twice) must be the same in each: the simulation and the learners are
+deterministic, so a difference means a run is not reproducible, and the merge refuses it.
+Every condition must hold every seed. OUT_DIR receives the same outputs as one run over all
+the seeds and conditions: results.json, learning_curves.csv, the figures and report.txt
+(traces from the first run with a results.json).
 """
+import csv
 import json
 import sys
 from pathlib import Path
@@ -17,22 +23,62 @@ from types import SimpleNamespace
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from run_experiment import SETTINGS, write_outputs  # noqa: E402
 
+CSV_SETTINGS = ("robots", "stars", "n_trials")   # what a learning_curves.csv tells
+
+
+def read_run(run_dir):
+    """(settings, {key: {seed: curve}}, traces or None) of one run directory."""
+    run_dir = Path(run_dir)
+    if (run_dir / "results.json").exists():
+        result = json.loads((run_dir / "results.json").read_text())
+        cells = {key: dict(zip(result["seeds"], runs))
+                 for key, runs in result["curves_m"].items()}
+        return result["settings"], cells, result["traces"]
+    path = run_dir / "learning_curves.csv"
+    if not path.exists():
+        raise ValueError(f"{run_dir} holds neither results.json nor learning_curves.csv")
+    cells, robots, stars = {}, {}, {}
+    with open(path, newline="") as handle:
+        for row in csv.DictReader(handle):
+            robots[row["target"]] = stars[row["star"]] = None   # ordered sets
+            key = f"{row['target']}/{row['star']}/{row['condition']}"
+            curve = cells.setdefault(key, {}).setdefault(int(row["seed"]), [])
+            if int(row["trial"]) != len(curve) + 1:
+                raise ValueError(f"{path}: {key} seed {row['seed']} trial {row['trial']} "
+                                 f"out of order")
+            curve.append(float(row["tracking_error_m"]))
+    lengths = {len(curve) for seeds in cells.values() for curve in seeds.values()}
+    if len(lengths) != 1:
+        raise ValueError(f"{path}: curves of different lengths {sorted(lengths)}")
+    return ({"robots": list(robots), "stars": list(stars), "n_trials": lengths.pop()},
+            cells, None)
+
 
 def merge(run_dirs):
     """(curves, traces, experiment-like settings) of the runs in ``run_dirs`` together."""
-    results = [json.loads((Path(d) / "results.json").read_text()) for d in run_dirs]
-    settings = results[0]["settings"]
-    for run_dir, result in zip(run_dirs, results):
-        if result.get("settings") != settings:
-            raise ValueError(f"{run_dir} ran other settings: {result.get('settings')} "
-                             f"against {settings}")
-    seeds = [seed for result in results for seed in result["seeds"]]
-    if len(set(seeds)) != len(seeds):
-        raise ValueError(f"a seed appears in more than one run: {seeds}")
-    curves = {key: [run for result in results for run in result["curves_m"][key]]
-              for key in results[0]["curves_m"]}
-    traces = {tuple(key.split("/")): value for key, value in results[0]["traces"].items()}
-    return curves, traces, SimpleNamespace(done_seeds=seeds, **settings)
+    runs = [(run_dir, *read_run(run_dir)) for run_dir in run_dirs]
+    full = [run for run in runs if set(SETTINGS) <= set(run[1])]
+    if not full:
+        raise ValueError("at least one run must have a results.json (settings, traces)")
+    settings, traces = full[0][1], full[0][3]
+    cells, seeds = {}, {}
+    for run_dir, run_settings, run_cells, _ in runs:
+        if any(run_settings.get(key) != settings[key] for key in run_settings):
+            raise ValueError(f"{run_dir} ran other settings: {run_settings} against {settings}")
+        for key, by_seed in run_cells.items():
+            for seed, curve in by_seed.items():
+                seeds[seed] = None
+                known = cells.setdefault(key, {}).setdefault(seed, curve)
+                if known != curve:
+                    raise ValueError(f"{key} seed {seed} differs between runs ({run_dir}): "
+                                     f"the runs are not reproducible")
+    seeds = list(seeds)
+    for key, by_seed in cells.items():
+        if set(by_seed) != set(seeds):
+            raise ValueError(f"{key} lacks seed(s) {sorted(set(seeds) - set(by_seed))}")
+    curves = {key: [by_seed[seed] for seed in seeds] for key, by_seed in cells.items()}
+    return (curves, {tuple(key.split("/")): value for key, value in traces.items()},
+            SimpleNamespace(done_seeds=seeds, **settings))
 
 
 def main(argv):
