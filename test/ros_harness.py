@@ -25,6 +25,7 @@ def _terminate_with_parent():
     ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
+STOP_SECONDS = 240   # a scenario script's own shutdown: at most 20 s a node (graph.sh)
 INTERACTIVE_DOMAIN_ID = 42   # tools/env.sh's default: scenario runs started by hand use it
 
 
@@ -189,10 +190,24 @@ def run_to_end(process, timeout=60):
 def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=()):
     """Run ``<scenario_dir>/run.sh --config <config> [--override <file>]... --out <out>`` on
     its own ROS domain (files relative to the scenario); the CompletedProcess (text output
-    captured)."""
+    captured). Past ``timeout`` the script gets SIGTERM, which its trap turns into stopping
+    every node in order (each runs in its own session, out of reach of a kill of the script
+    alone; graph.sh), then subprocess.TimeoutExpired is raised."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
     args = ["--config", str(Path(scenario_dir) / config)]
     for override in overrides:
         args += ["--override", str(Path(scenario_dir) / override)]
-    return subprocess.run(["bash", str(Path(scenario_dir) / "run.sh"), *args, "--out", str(out)],
-                          env=env, capture_output=True, text=True, timeout=timeout)
+    command = ["bash", str(Path(scenario_dir) / "run.sh"), *args, "--out", str(out)]
+    with subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True) as script:
+        try:
+            stdout, stderr = script.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            script.terminate()
+            try:
+                stdout, stderr = script.communicate(timeout=STOP_SECONDS)
+            except subprocess.TimeoutExpired:
+                script.kill()
+                stdout, stderr = script.communicate()
+            raise subprocess.TimeoutExpired(command, timeout, stdout, stderr) from None
+    return subprocess.CompletedProcess(command, script.returncode, stdout, stderr)

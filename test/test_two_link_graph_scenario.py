@@ -4,6 +4,7 @@ import os
 import signal
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -96,3 +97,22 @@ def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
         assert not bool(pairs["complete"])
         assert 0 < len(pairs["source"]) < 400
         assert topics["/correspondences"].message_count == len(pairs["source"])
+
+
+def test_a_run_past_its_time_limit_stops_every_node_and_finalises_the_bag(tmp_path):
+    """run_scenario's time limit (which the scenario tests rely on) ends the script the way
+    its trap handles: no node of the run is left behind, and the bag is readable."""
+    out = tmp_path / "run"
+    with pytest.raises(subprocess.TimeoutExpired) as timeout:
+        run_scenario(SCENARIO, out, timeout=12)
+    assert "interrupted: stopping the nodes" in timeout.value.stderr
+    left = [pid for pid in os.listdir("/proc") if pid.isdigit() and _cmdline_holds(pid, out)]
+    assert left == []
+    summary(out / "run.mcap")          # raises unless the recorder finalised the file
+
+
+def _cmdline_holds(pid, text):
+    try:
+        return str(text).encode() in Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:          # the process ended meanwhile
+        return False
