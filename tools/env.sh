@@ -19,9 +19,10 @@ export MKL_NUM_THREADS=${MKL_NUM_THREADS:-1}
 # OpenBLAS picks its kernels by CPU, and their rounding differs: a learner trial gave 5.18 mm
 # with the Haswell kernels and 5.72 mm with the Prescott ones (measured on 2026-12-03). The
 # online learners amplify such differences, so pin one kernel set (AVX2 + FMA, which most
-# x86-64 hosts have) for results that repeat from one machine to the next.
-if [ -z "${OPENBLAS_CORETYPE:-}" ] && grep -qw avx2 /proc/cpuinfo 2>/dev/null \
-        && grep -qw fma /proc/cpuinfo 2>/dev/null; then
-    export OPENBLAS_CORETYPE=Haswell
+# x86-64 hosts have) for results that repeat from one machine to the next; numpy's own SIMD
+# loops likewise stop at AVX2 (an AVX-512 host would dispatch others).
+if grep -qw avx2 /proc/cpuinfo 2>/dev/null && grep -qw fma /proc/cpuinfo 2>/dev/null; then
+    export OPENBLAS_CORETYPE=${OPENBLAS_CORETYPE:-Haswell}
+    export NPY_ENABLE_CPU_FEATURES=${NPY_ENABLE_CPU_FEATURES:-"SSSE3 SSE41 POPCNT SSE42 AVX F16C FMA3 AVX2"}
 fi
 unset _lpa_root
