@@ -4,6 +4,7 @@ experiment step took 290 s beside two other experiments on the 2 cores, hence th
 youBot <-> Pincher (config.yaml), and youBot <-> 2-link arm (5 and 2 joints)."""
 import csv
 import json
+import sys
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ from lpa_transfer.serial_chain import forward_kinematics
 from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
+sys.path.insert(0, str(SCENARIO))
+from merge_results import merge  # noqa: E402
 pytestmark = pytest.mark.timeout(600)   # over setup.cfg's 300 s: each run takes minutes
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")
@@ -69,6 +72,25 @@ def test_outputs_and_bag(smoke_run):
     assert offsets[:, :2].max() < 0.18 and offsets[:, :2].max() > 0.05
     models = sorted(p.name for p in (smoke_run / "models").iterdir())
     assert len(models) == 4
+
+
+def test_a_run_of_one_condition_repeats_the_full_runs_curves(smoke_run, tmp_path):
+    """``conditions`` runs a share of them (as reference results are joined from shares);
+    own+transfer-LPA then runs right after learning from scratch instead of after four other
+    conditions on the same learner and simulator nodes, and both its curve and the scratch
+    curve come out the same to the last digit, which merge_results checks."""
+    share = tmp_path / "own_lpa.yaml"
+    share.write_text("experiment:\n  ros__parameters:\n    conditions: [own+transfer-LPA]\n")
+    out = tmp_path / "run"
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
+                          overrides=["smoke.yaml", share])
+    assert result.returncode == 0, result.stdout + result.stderr
+    curves = json.loads((out / "results.json").read_text())["curves_m"]
+    assert sorted(curves) == sorted(f"{robot}/star1/{condition}"
+                                    for robot in ("youbot", "pincher")
+                                    for condition in ("uninitialised", "own+transfer-LPA"))
+    merged, _, _ = merge([smoke_run, out])      # refuses a curve that differs between runs
+    assert len(merged) == 2 * len(CONDITIONS)
 
 
 def test_transfer_between_arms_with_5_and_2_joints(tmp_path):

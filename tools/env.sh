@@ -23,6 +23,8 @@ export MKL_NUM_THREADS=${MKL_NUM_THREADS:-1}
 # loops likewise stop at AVX2 (an AVX-512 host would dispatch others).
 if grep -qw avx2 /proc/cpuinfo 2>/dev/null && grep -qw fma /proc/cpuinfo 2>/dev/null; then
     export OPENBLAS_CORETYPE=${OPENBLAS_CORETYPE:-Haswell}
-    export NPY_ENABLE_CPU_FEATURES=${NPY_ENABLE_CPU_FEATURES:-"SSSE3 SSE41 POPCNT SSE42 AVX F16C FMA3 AVX2"}
+    _avx2_level="SSSE3 SSE41 POPCNT SSE42 AVX F16C FMA3 AVX2"
+    export NPY_ENABLE_CPU_FEATURES=${NPY_ENABLE_CPU_FEATURES:-$_avx2_level}
+    unset _avx2_level
 fi
 unset _lpa_root
