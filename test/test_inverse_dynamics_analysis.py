@@ -96,9 +96,12 @@ def test_merging_runs_of_other_conditions_joins_them_and_checks_the_shared_curve
     for key, runs in {**first, **second}.items():
         assert curves[key] == runs
     assert set(traces) == {("a", "star1"), ("b", "star1")} and experiment.tolerance == 0.1
-    write_run(tmp_path / "c", [0, 1], 1e-9, conditions=CONDITIONS[:1] + CONDITIONS[4:])
+    write_run(tmp_path / "c", [0, 1], 1e-3, conditions=CONDITIONS[:1] + CONDITIONS[4:])
     with pytest.raises(ValueError, match="uninitialised seed 0 differs"):
         merge([tmp_path / "ref", tmp_path / "c"])
+    write_run(tmp_path / "e", [0, 1], 1e-14, conditions=CONDITIONS[:1] + CONDITIONS[4:])
+    curves, _, _ = merge([tmp_path / "ref", tmp_path / "e"])   # last-digit noise: accepted,
+    assert curves["a/star1/uninitialised"] == first["a/star1/uninitialised"]   # first kept
     write_run(tmp_path / "d", [1], 0.0, conditions=CONDITIONS[:1] + CONDITIONS[4:])
     with pytest.raises(ValueError, match=r"own\+transfer-PA lacks seed\(s\) \[0\]"):
         merge([tmp_path / "ref", tmp_path / "d"])
