@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""Why do initialised youBot learners level off above learning from scratch? (thesis §5.5.3;
+issue 4)
+
+Usage: ``python bench/id_plateau.py [--seed S] [--trials N] [--target youbot] [--stars ...]
+[--variants default norm_out=1 ...]``, from the repository root.
+
+In process, with the library only (no ROS), the scenario of
+``scenarios/inverse_dynamics/config.yaml`` as ``id_transfer_headroom.py`` builds it: for each
+star, the target learns the star from scratch, from its own babbling data (random) and from the
+source's experience mapped by PA followed by its own babbling (own+transfer-PA). Each variant
+changes LWPR hyperparameters of every condition's learner (``name=value``, the value parsed as
+JSON; ``default`` changes nothing). Printed per condition: the tracking error of the first and
+last trials (mm), and after the last trial the output normalisation LWPR chose
+(``norm_out_``: the torque spread of the first batch it learned, so 1 for a learner that learns
+sample by sample from the start), the receptive fields per output, the median RF width on
+the task, 1/sqrt(D_jj) over the input dimensions of the RFs most activated by the last trial's
+inputs (normalised input units), and the share of the last trial's activation (summed over
+its inputs, outputs and RFs above LWPR's cutoff) that falls on RFs created while the learner
+was initialised; and how far the learner's own task data lie from the desired states: the
+median over its samples of the distance of (q, q̇, q̈) to the nearest desired state of the
+star (normalised input units), in all trials and in the last one.
+
+Deterministic: the same seed prints the same numbers.
+"""
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+import yaml
+from sklearn.neighbors import NearestNeighbors
+
+from lpa_transfer.control import PID
+from lpa_transfer.online_learning import FeedForwardLearner, make_regressor
+from lpa_transfer.procrustes import ProcrustesAnalysis
+
+from id_transfer_headroom import CONFIG, StarRobot, babble
+
+
+def parse_variant(text):
+    """``default`` → {}; ``a=1,b=false`` → {"a": 1, "b": False} (values as JSON)."""
+    if text == "default":
+        return {}
+    pairs = (item.split("=", 1) for item in text.split(","))
+    return {key: json.loads(value) for key, value in pairs}
+
+
+def learner(robot, overrides, samples=None):
+    name, params = robot.regressor
+    model = FeedForwardLearner(make_regressor(name, **dict(params, **overrides)),
+                               PID.from_gains(robot.pid_gains))
+    if samples is not None:
+        model.initialise(samples)
+    return model
+
+
+def on_task(regressor, inputs, n_initial):
+    """(median width of the most active RFs, share of activation on the first ``n_initial``
+    RFs of each output) over ``inputs`` (module docstring)."""
+    x = inputs / regressor.norm_in_
+    widths, initial, total = [], 0.0, 0.0
+    for fields, k0 in zip(regressor.receptive_fields_, n_initial):
+        diff = x[:, None, :] - fields["c"][None]
+        distance = np.einsum("nki,kij,nkj->nk", diff, fields["D"], diff)
+        best = fields["D"][distance.argmin(axis=1)]
+        widths.append(np.median(1 / np.sqrt(np.diagonal(best, axis1=1, axis2=2))))
+        w = np.exp(-0.5 * distance)
+        w[w <= regressor.cutoff] = 0.0
+        initial, total = initial + w[:, :k0].sum(), total + w.sum()
+    return float(np.median(widths)), initial / total
+
+
+def off_desired(robot, inputs):
+    """Median distance of ``inputs`` (N, 3n) to the star's nearest desired state (q_d, q̇_d,
+    q̈_d), in units of the learner's input scale."""
+    scale = robot.regressor[1]["norm_in"]
+    desired = np.hstack(robot.trajectory[:3]) / scale
+    distance = NearestNeighbors(n_neighbors=1).fit(desired).kneighbors(inputs / scale)[0]
+    return float(np.median(distance))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--config", type=Path, default=CONFIG)
+    parser.add_argument("--trials", type=int, default=15)
+    parser.add_argument("--target", default="youbot")
+    parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
+    parser.add_argument("--variants", nargs="+", default=["default", "norm_out=1.0"])
+    parser.add_argument("--conditions", nargs="+",
+                        default=["uninitialised", "random", "own+transfer-PA"])
+    args = parser.parse_args(argv)
+    config = yaml.safe_load(args.config.read_text())
+    experiment = config["experiment"]["ros__parameters"]
+    names = experiment["robots"]
+    source = next(name for name in names if name != args.target)
+    for star in args.stars:
+        robots = {name: StarRobot(config, name, star) for name in names}
+        pairs = dict(zip(names, babble(config, [robots[name] for name in names], star,
+                                       args.seed)))
+        experience = robots[source].trials(robots[source].learner(),
+                                           experiment["n_source_trials"])[1]
+        transferred = ProcrustesAnalysis(latent_dim=experiment["latent_dim"]).fit(
+            pairs[source], pairs[args.target]).transfer(experience)
+        initial = {"uninitialised": None, "random": pairs[args.target],
+                   "own+transfer-PA": np.vstack((transferred, pairs[args.target]))}
+        n = robots[args.target].params.n_joints
+        for text in args.variants:
+            overrides = parse_variant(text)
+            print(f"\n{source} -> {args.target}, {star}, seed {args.seed}, variant {text}")
+            for condition in args.conditions:
+                model = learner(robots[args.target], overrides, initial[condition])
+                n_initial = (model.regressor.n_receptive_fields_ if initial[condition]
+                             is not None else np.zeros(n, dtype=int))
+                errors, seen = robots[args.target].trials(model, args.trials)
+                regressor = model.regressor
+                last = seen[-len(seen) // args.trials:, :3 * n]
+                print(f"  {condition:16s} trial 1 {1e3 * errors[0]:6.2f}  trial "
+                      f"{args.trials} {1e3 * errors[-1]:5.2f} mm; norm_out "
+                      + " ".join(f"{v:.3g}" for v in regressor.norm_out_)
+                      + f"; RFs/output {regressor.n_receptive_fields_.mean():.0f}; "
+                      "task RF width {:.3f}, activation on initial RFs {:.0%}".format(
+                          *on_task(regressor, last, n_initial))
+                      + "; own data off the desired states {:.3f} (last trial {:.3f})".format(
+                          off_desired(robots[args.target], seen[:, :3 * n]),
+                          off_desired(robots[args.target], last)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
