@@ -21,6 +21,14 @@ was initialised; and how far the learner's own task data lie from the desired st
 median over its samples of the distance of (q, q̇, q̈) to the nearest desired state of the
 star (normalised input units), in all trials and in the last one.
 
+``--swap`` then separates the initial data from the data each learner collected: four fresh
+learners (``norm_out=1`` so that all four scale alike), initialised with nothing or with the
+random data, then given offline, in order, the task experience that the uninitialised or the
+random learner collected in its trials, and evaluated on one trial without learning. If the
+initial data harm the model, the random-initialised learners are worse on the same
+experience; if the experience is what differs, the learners given the random learner's
+experience are worse whatever their initialisation.
+
 Deterministic: the same seed prints the same numbers.
 """
 import argparse
@@ -90,6 +98,8 @@ def main(argv=None):
     parser.add_argument("--variants", nargs="+", default=["default", "norm_out=1.0"])
     parser.add_argument("--conditions", nargs="+",
                         default=["uninitialised", "random", "own+transfer-PA"])
+    parser.add_argument("--swap", action="store_true",
+                        help="the 2 x 2 of initial data and collected experience (docstring)")
     args = parser.parse_args(argv)
     config = yaml.safe_load(args.config.read_text())
     experiment = config["experiment"]["ros__parameters"]
@@ -109,6 +119,7 @@ def main(argv=None):
         for text in args.variants:
             overrides = parse_variant(text)
             print(f"\n{source} -> {args.target}, {star}, seed {args.seed}, variant {text}")
+            collected = {}
             for condition in args.conditions:
                 model = learner(robots[args.target], overrides, initial[condition])
                 n_initial = (model.regressor.n_receptive_fields_ if initial[condition]
@@ -116,6 +127,7 @@ def main(argv=None):
                 errors, seen = robots[args.target].trials(model, args.trials)
                 regressor = model.regressor
                 last = seen[-len(seen) // args.trials:, :3 * n]
+                collected[condition] = seen
                 print(f"  {condition:16s} trial 1 {1e3 * errors[0]:6.2f}  trial "
                       f"{args.trials} {1e3 * errors[-1]:5.2f} mm; norm_out "
                       + " ".join(f"{v:.3g}" for v in regressor.norm_out_)
@@ -125,7 +137,21 @@ def main(argv=None):
                       + "; own data off the desired states {:.3f} (last trial {:.3f})".format(
                           off_desired(robots[args.target], seen[:, :3 * n]),
                           off_desired(robots[args.target], last)), flush=True)
+            if args.swap:
+                swap(robots[args.target], dict(overrides, norm_out=1.0), initial, collected)
     return 0
+
+
+def swap(robot, overrides, initial, collected):
+    """Print the frozen one-trial errors of the ``--swap`` 2 x 2 (module docstring)."""
+    for start in ("uninitialised", "random"):
+        for source in ("uninitialised", "random"):
+            model = learner(robot, overrides, initial[start])
+            model.initialise(collected[source])
+            model.learn = False
+            error = robot.trials(model, 1)[0][0]
+            print(f"  initialised {start:13s} + the {source} learner's experience: "
+                  f"{1e3 * error:.2f} mm (one trial, frozen)", flush=True)
 
 
 if __name__ == "__main__":
