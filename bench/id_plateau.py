@@ -29,10 +29,21 @@ initial data harm the model, the random-initialised learners are worse on the sa
 experience; if the experience is what differs, the learners given the random learner's
 experience are worse whatever their initialisation.
 
+``--start-noise SIGMA`` asks how much learning from scratch itself varies: it is one
+deterministic run, whereas the initialised conditions vary with the babbling seed. ``--starts``
+more uninitialised learners learn the star from rest at the centre with every joint moved by
+N(0, SIGMA) rad (seeded by the seed and the start's index), and their first and last trials are
+printed beside the unperturbed one. With ``--reference DIR`` (a chapter 5 run or reference
+result with a learning_curves.csv, e.g. scenarios/inverse_dynamics/reference_results) it then
+prints that result's convergence table and training time saved again (run_experiment's own
+computation), with learning from scratch taken as all these scratch runs instead of the one
+unperturbed run: how much the thesis' measure depends on which draw learning from scratch is.
+
 Deterministic: the same seed prints the same numbers.
 """
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -100,11 +111,17 @@ def main(argv=None):
                         default=["uninitialised", "random", "own+transfer-PA"])
     parser.add_argument("--swap", action="store_true",
                         help="the 2 x 2 of initial data and collected experience (docstring)")
+    parser.add_argument("--start-noise", type=float, default=0.0,
+                        help="rad; > 0 adds the perturbed scratch runs (docstring)")
+    parser.add_argument("--starts", type=int, default=4)
+    parser.add_argument("--reference", type=Path,
+                        help="a run's directory: its table with these scratch runs (docstring)")
     args = parser.parse_args(argv)
     config = yaml.safe_load(args.config.read_text())
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]
     source = next(name for name in names if name != args.target)
+    scratch_runs = {}
     for star in args.stars:
         robots = {name: StarRobot(config, name, star) for name in names}
         pairs = dict(zip(names, babble(config, [robots[name] for name in names], star,
@@ -119,7 +136,7 @@ def main(argv=None):
         for text in args.variants:
             overrides = parse_variant(text)
             print(f"\n{source} -> {args.target}, {star}, seed {args.seed}, variant {text}")
-            collected = {}
+            collected, errors_of = {}, {}
             for condition in args.conditions:
                 model = learner(robots[args.target], overrides, initial[condition])
                 n_initial = (model.regressor.n_receptive_fields_ if initial[condition]
@@ -127,7 +144,7 @@ def main(argv=None):
                 errors, seen = robots[args.target].trials(model, args.trials)
                 regressor = model.regressor
                 last = seen[-len(seen) // args.trials:, :3 * n]
-                collected[condition] = seen
+                collected[condition], errors_of[condition] = seen, list(errors)
                 print(f"  {condition:16s} trial 1 {1e3 * errors[0]:6.2f}  trial "
                       f"{args.trials} {1e3 * errors[-1]:5.2f} mm; norm_out "
                       + " ".join(f"{v:.3g}" for v in regressor.norm_out_)
@@ -139,7 +156,52 @@ def main(argv=None):
                           off_desired(robots[args.target], last)), flush=True)
             if args.swap:
                 swap(robots[args.target], dict(overrides, norm_out=1.0), initial, collected)
+            if args.start_noise > 0:
+                scratch_runs[star] = perturbed_starts(robots[args.target], overrides, args)
+                if "uninitialised" in collected:
+                    scratch_runs[star].insert(0, errors_of["uninitialised"])
+    if args.reference is not None and scratch_runs:
+        print_reference_table(args, experiment, scratch_runs)
     return 0
+
+
+def print_reference_table(args, experiment, scratch_runs):
+    """The reference's convergence table for the target, learning from scratch replaced by
+    ``scratch_runs`` (star -> curves; module docstring)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scenarios" / "inverse_dynamics"))
+    from merge_results import read_run
+    from run_experiment import convergence_table
+    cells = read_run(args.reference)[1]
+    curves = {key: list(by_seed.values()) for key, by_seed in cells.items()
+              if key.startswith(f"{args.target}/") and key.split("/")[1] in scratch_runs}
+    for star, runs in scratch_runs.items():
+        curves[f"{args.target}/{star}/uninitialised"] = runs
+    rows, savings = convergence_table(curves, [args.target], list(scratch_runs),
+                                      experiment["convergence_tolerance"],
+                                      experiment["babbling_seconds"])
+    print(f"\n{args.reference}: {args.target} as target, learning from scratch = "
+          + ", ".join(f"{star} {len(runs)} runs (final {1e3 * np.mean(runs, axis=0)[-1]:.2f} "
+                      "mm)" for star, runs in scratch_runs.items()))
+    for _, star, condition, k, n in rows:
+        print(f"  {star} {condition:16s} converged in {k if k <= n else f'> {n}'} trials")
+    print("  training time saved: " + ", ".join(f"{c} {100 * v:.1f}%"
+                                                for c, v in savings[args.target].items()))
+
+
+def perturbed_starts(robot, overrides, args):
+    """Print the first and last trials of ``--starts`` scratch learners started from perturbed
+    rest positions (module docstring); their tracking errors (m)."""
+    home = np.asarray(robot.kinematics.home, dtype=np.float64)
+    runs = []
+    for k in range(args.starts):
+        rng = np.random.default_rng([args.seed, k])
+        start = home + rng.normal(0.0, args.start_noise, home.shape)
+        errors = robot.trials(learner(robot, overrides), args.trials, start=start)[0]
+        print(f"  uninitialised, start {k} (noise {args.start_noise:g} rad): trial 1 "
+              f"{1e3 * errors[0]:6.2f}  trial {args.trials} {1e3 * errors[-1]:5.2f} mm; "
+              "trials " + " ".join(f"{1e3 * e:.2f}" for e in errors), flush=True)
+        runs.append(errors)
+    return runs
 
 
 def swap(robot, overrides, initial, collected):

@@ -71,9 +71,10 @@ class StarRobot:
             learner.initialise(samples)
         return learner
 
-    def trials(self, learner, n_trials):
-        """Tracking errors (m) and the experience of ``n_trials`` trials from rest at the centre."""
-        self.sim.reset(self.kinematics.home)
+    def trials(self, learner, n_trials, start=None):
+        """Tracking errors (m) and the experience of ``n_trials`` trials from rest at the centre
+        (or at the joint positions ``start``)."""
+        self.sim.reset(self.kinematics.home if start is None else start)
         state, errors, experience = self.sim.state(), [], []
         for _ in range(n_trials):
             trial = learner.run_trial(self.sim.step, state, *self.trajectory, self.n_steps,
