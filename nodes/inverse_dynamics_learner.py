@@ -14,7 +14,8 @@ Parameters:
 
 * ``robot``: the robot parameter file; ``step_service`` and ``reset_service`` (default
   ``robot_sim/step``, ``robot_sim/reset``, resolved in the node's namespace): every RunTrials
-  call first resets the robot to rest at ``centre_pose``.
+  call first resets the robot to rest at ``centre_pose`` (plus the request's
+  ``start_offset``, if any: a seeded run's perturbed start).
 * ``control_rate`` (Hz, 100; up to 1000) and ``physics_step`` (s, 0.001, the simulator's):
   each control period advances round(1 / (control_rate · physics_step)) physics steps.
 * ``pid``: ``[kp, ki, kd]`` (thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0]).
@@ -42,6 +43,7 @@ from rclpy.parameter import Parameter
 
 from lpa_transfer.babbling import robot_kinematics
 from lpa_transfer.control import PID
+from lpa_transfer.kinematics import home_pose
 from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
 from lpa_transfer.robot_params import load_robot_params
 from lpa_transfer.tasks import star_task
@@ -124,7 +126,7 @@ class InverseDynamicsLearner(Node):
     def run_trials(self, request, response):
         wait_for_services([self.robot_clients.step, self.robot_clients.reset], self.wait_timeout,
                           self.stop)
-        state = self.reset_robot()
+        state = self.reset_robot_to(self.start_pose(request.start_offset))
         self.learner.learn = not request.frozen
         errors, experience = [], []
         for _ in range(request.n_trials):
@@ -145,9 +147,17 @@ class InverseDynamicsLearner(Node):
         return (f"{request.n_trials} trials, tracking error "
                 + ", ".join(f"{1e3 * e:.1f}" for e in errors) + " mm")
 
-    def reset_robot(self):
-        """Put the robot at rest at the star's centre pose; its state."""
-        return self.reset_robot_to(self.centre_pose)
+    def start_pose(self, offset):
+        """The centre pose plus ``offset`` (empty: none); ValueError unless that is one finite
+        value per joint inside the joint limits."""
+        if len(offset) == 0:
+            return self.centre_pose
+        offset = np.asarray(offset, dtype=np.float64)
+        if offset.shape != self.centre_pose.shape or not np.isfinite(offset).all():
+            raise ValueError(f"start_offset needs {len(self.centre_pose)} finite joint values "
+                             f"(or none), got {offset.tolist()}")
+        return home_pose(self.robot.joint_limits, self.centre_pose + offset,
+                         name="the centre pose plus start_offset")
 
     def publish(self, trial, n_learned, n_rejected):
         msg = TrialResult(robot=self.robot.name, task=self.get_name(), trial=self.trial,

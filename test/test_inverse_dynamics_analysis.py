@@ -40,8 +40,12 @@ def test_time_saved_counts_trials_and_babbling_like_the_thesis():
 
 
 def write_run(path, seeds, offset, settings=SETTINGS, conditions=CONDITIONS):
-    curves = {f"{robot}/star1/{condition}": [[offset + seed + trial for trial in (3, 2, 1)]
-                                             for seed in seeds]
+    """Made-up curves; learning from scratch is the same for every seed unless the settings
+    have start noise, as in the experiment."""
+    def varies(condition):
+        return condition != "uninitialised" or settings.get("start_noise", 0) > 0
+    curves = {f"{robot}/star1/{condition}": [[offset + varies(condition) * seed + trial
+                                              for trial in (3, 2, 1)] for seed in seeds]
               for robot in settings["robots"] for condition in conditions}
     trace = {"trial": 1, "desired": [[0.0, 0.0], [1.0, 1.0]], "actual": [[0.0, 0.1], [1.0, 0.9]]}
     path.mkdir()
@@ -54,7 +58,7 @@ def write_run(path, seeds, offset, settings=SETTINGS, conditions=CONDITIONS):
 
 def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     first = write_run(tmp_path / "a", [0, 2], 0.0)
-    second = write_run(tmp_path / "b", [1], 10.0)
+    second = write_run(tmp_path / "b", [1], 0.0)
     curves, traces, experiment = merge([tmp_path / "a", tmp_path / "b"])
     assert experiment.done_seeds == [0, 2, 1] and experiment.n_trials == 3
     for key, runs in curves.items():
@@ -62,7 +66,7 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     assert merge_main(["merge", str(tmp_path / "all"), str(tmp_path / "a"),
                        str(tmp_path / "b")]) == 0
     merged = json.loads((tmp_path / "all" / "results.json").read_text())
-    assert merged["seeds"] == [0, 2, 1] and merged["settings"] == SETTINGS
+    assert merged["seeds"] == [0, 2, 1] and merged["settings"] == dict(SETTINGS, start_noise=0.0)
     report = (tmp_path / "all" / "report.txt").read_text()
     assert "3 seed(s) (0, 2, 1)" in report
     # per robot: 3 trials from scratch once, 5 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
@@ -107,3 +111,34 @@ def test_merging_runs_of_other_conditions_joins_them_and_checks_the_shared_curve
         merge([tmp_path / "ref", tmp_path / "d"])
     with pytest.raises(ValueError, match="at least one run must have a results.json"):
         merge([tmp_path / "ref"])
+
+
+def test_merging_runs_with_start_noise_checks_that_scratch_varies_by_seed(tmp_path):
+    """With start noise every seed learns from scratch from its own start: such shares join,
+    and counted time includes every seed's scratch run; a share without start noise (whose
+    scratch curves are alike) is refused, also as a CSV that does not say."""
+    noisy = dict(SETTINGS, start_noise=1e-3)
+    write_run(tmp_path / "a", [0, 1], 0.0, noisy)
+    write_run(tmp_path / "b", [2], 0.0, noisy)
+    curves, _, experiment = merge([tmp_path / "a", tmp_path / "b"])
+    assert curves["a/star1/uninitialised"] == [[3, 2, 1], [4, 3, 2], [5, 4, 3]]
+    assert merge_main(["merge", str(tmp_path / "all"), str(tmp_path / "a"),
+                       str(tmp_path / "b")]) == 0
+    report = (tmp_path / "all" / "report.txt").read_text()
+    # per robot: 6 conditions x 3 seeds x 3 trials, scratch included, and 3 x 2 s babbling
+    assert f"simulated: {54 * 8.4 + 6:.0f} s per robot" in report
+    assert "learning from scratch for every seed" in report
+    write_run(tmp_path / "quiet", [3, 4], 0.0)
+    assert merge_main(["merge", str(tmp_path / "ref"), str(tmp_path / "quiet")]) == 0
+    (tmp_path / "ref" / "results.json").unlink()
+    with pytest.raises(ValueError, match="learn from scratch alike, which runs with "
+                                         "start_noise 0.001 cannot"):
+        merge([tmp_path / "a", tmp_path / "ref"])
+    with pytest.raises(ValueError, match="ran other settings"):
+        merge([tmp_path / "a", tmp_path / "quiet"])
+    write_run(tmp_path / "c", [5, 6], 0.0, noisy)
+    assert merge_main(["merge", str(tmp_path / "noisy_ref"), str(tmp_path / "c")]) == 0
+    (tmp_path / "noisy_ref" / "results.json").unlink()
+    with pytest.raises(ValueError, match="learn from scratch differently, which runs with "
+                                         "start_noise 0 cannot"):
+        merge([tmp_path / "quiet", tmp_path / "noisy_ref"])

@@ -75,3 +75,24 @@ def test_initialise_rejects_bad_samples_and_keeps_serving(learner):
     assert (answer.n_learned, answer.n_rejected) == (4, 2)
     again = client.call(run, RunTrials.Request(n_trials=1, frozen=True), timeout=120)
     assert again.success and len(again.tracking_errors) == 1
+
+
+def test_run_trials_starts_from_the_offset_pose_and_refuses_bad_offsets(learner):
+    """A seeded run's start (RunTrials.start_offset): the centre pose moved joint by joint;
+    a wrong length, NaN or a pose outside the joint limits is refused, and the node serves on."""
+    client, run, init, _, _ = learner
+    frozen = lambda offset: client.call(run, RunTrials.Request(   # noqa: E731
+        n_trials=1, frozen=True, start_offset=offset), timeout=120)
+    for offset, message in (([0.01, 0.0], "needs 4 finite joint values"),
+                            ([0.0, float("nan"), 0.0, 0.0], "needs 4 finite joint values"),
+                            ([0.0, 0.0, 0.0, 3.0], "outside the joint limits")):
+        answer = frozen(offset)
+        assert not answer.success and message in answer.message, answer.message
+    assert client.call(init, InitialiseLearner.Request(samples=to_matrix(np.zeros((0, 16))),
+                                                       reset=True)).success
+    centre, again, moved = frozen([]), frozen([]), frozen([0.0, 0.05, -0.05, 0.0])
+    assert centre.success and again.success and moved.success, moved.message
+    assert again.tracking_errors == centre.tracking_errors        # deterministic
+    assert moved.tracking_errors[0] > centre.tracking_errors[0]   # starts off the path
+    q0 = from_matrix(moved.experience, "experience")[0, :4]
+    assert q0 == pytest.approx([0.0, 0.65, 0.85, 0.6], abs=0.03)

@@ -94,6 +94,27 @@ def test_a_run_of_one_condition_repeats_the_full_runs_curves(smoke_run, tmp_path
     assert len(merged) == 2 * len(CONDITIONS)
 
 
+def test_start_noise_gives_every_seed_its_own_run_from_scratch(tmp_path):
+    """``start_noise``: every seed starts its runs, learning from scratch included, from its
+    own perturbed rest pose, so the scratch curves of two seeds differ; they still learn."""
+    share = tmp_path / "noise.yaml"
+    share.write_text("experiment:\n  ros__parameters:\n    seeds: [0, 1]\n"
+                     "    conditions: [random]\n    start_noise: 0.001\n")
+    out = tmp_path / "run"
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
+                          overrides=["smoke.yaml", share])
+    assert result.returncode == 0, result.stdout + result.stderr
+    results = json.loads((out / "results.json").read_text())
+    assert results["settings"]["start_noise"] == 0.001 and results["seeds"] == [0, 1]
+    for robot in ("youbot", "pincher"):
+        scratch = np.asarray(results["curves_m"][f"{robot}/star1/uninitialised"])
+        assert scratch.shape == (2, 2) and (scratch[:, 1] < scratch[:, 0]).all()
+        assert not np.allclose(scratch[0], scratch[1], rtol=1e-6, atol=0)
+    assert "learning from scratch for every seed" in (out / "report.txt").read_text()
+    merged, _, experiment = merge([out])        # its own check: scratch differs by seed
+    assert experiment.start_noise == 0.001 and len(merged) == 2 * 2
+
+
 def test_transfer_between_arms_with_5_and_2_joints(tmp_path):
     """youbot_two_link.yaml: the same graph with a planar 2-link arm (2-D task space)."""
     out = tmp_path / "run"

@@ -6,8 +6,8 @@ Usage: ``python scenarios/inverse_dynamics/merge_results.py OUT_DIR RUN_DIR...``
 Each RUN_DIR holds the ``results.json`` of one ``run.sh`` (e.g. two graphs on two ROS
 domains, ``--override`` files with seeds [0, 2, 4, ...] and [1, 3, 5, ...], or with other
 ``conditions``), or only the ``learning_curves.csv`` of one (a reference result). The runs
-must share their settings (robots, stars, trials, convergence rule; a CSV holds only the
-first three). A curve that more than one run holds (learning from scratch, which every run
+must share their settings (robots, stars, trials, convergence rule, start noise; a CSV holds
+only the first three, and a CSV of other start noise differs in its scratch curves). A curve that more than one run holds (learning from scratch, which every run
 repeats, or a seed run twice) must be the same in each, to a relative ``RTOL``: the
 simulation and the learners are deterministic, so a larger difference means a run is not
 reproducible, and the merge refuses it. (Not bit for bit: the same condition run after other
@@ -38,7 +38,8 @@ def read_run(run_dir):
         result = json.loads((run_dir / "results.json").read_text())
         cells = {key: dict(zip(result["seeds"], runs))
                  for key, runs in result["curves_m"].items()}
-        return result["settings"], cells, result["traces"]
+        settings = {"start_noise": 0.0, **result["settings"]}   # older runs: no start noise
+        return settings, cells, result["traces"]
     path = run_dir / "learning_curves.csv"
     if not path.exists():
         raise ValueError(f"{run_dir} holds neither results.json nor learning_curves.csv")
@@ -83,9 +84,26 @@ def merge(run_dirs):
     for key, by_seed in cells.items():
         if set(by_seed) != set(seeds):
             raise ValueError(f"{key} lacks seed(s) {sorted(set(seeds) - set(by_seed))}")
+        if key.endswith("/uninitialised"):
+            check_start_noise(key, by_seed, settings["start_noise"])
     curves = {key: [by_seed[seed] for seed in seeds] for key, by_seed in cells.items()}
     return (curves, {tuple(key.split("/")): value for key, value in traces.items()},
             SimpleNamespace(done_seeds=seeds, **settings))
+
+
+def check_start_noise(key, by_seed, start_noise):
+    """Learning from scratch is the same for every seed without start noise and differs
+    between any two seeds with it; a share run with other start noise (a CSV does not say)
+    breaks that, and is refused."""
+    seeds = sorted(by_seed)
+    for i, a in enumerate(seeds):
+        for b in seeds[i + 1:]:
+            same = np.allclose(by_seed[a], by_seed[b], rtol=RTOL, atol=0)
+            if same != (start_noise == 0):
+                raise ValueError(f"{key}: seeds {a} and {b} learn from scratch "
+                                 f"{'alike' if same else 'differently'}, which runs with "
+                                 f"start_noise {start_noise:g} cannot; a share was run with "
+                                 "other start noise")
 
 
 def main(argv):

@@ -13,8 +13,14 @@ fresh learner run for ``n_trials`` trials (parameter ``conditions``: which of th
 default all; learning from scratch always runs, as every other condition is measured against
 it):
 
-* ``uninitialised``: learning from scratch (the simulation is deterministic, so this curve is
-  the same for every seed; it is run once and reused);
+* ``uninitialised``: learning from scratch. The simulation is deterministic, so with
+  ``start_noise`` 0 this curve is the same for every seed: it is run once and reused. With
+  ``start_noise`` > 0 (rad) every seed's runs start from the rest pose moved by N(0,
+  start_noise) per joint (drawn from the seed, the robot and the star; the same start for all
+  conditions of that seed), and learning from scratch runs for every seed too, so that its
+  run-to-run spread is measured like the other conditions' (one scratch run is one draw: a
+  1 mrad change of the start moves the youBot's final Star 1 error between 2.30 and 2.77 mm,
+  bench/README.md);
 * ``random``: initialised with the target's own babbling data (its side of the pairs);
 * ``transfer-PA`` / ``transfer-LPA``: initialised with the other robot's experience of the
   same star from scratch (its first ``n_source_trials`` trials), transferred through the
@@ -55,7 +61,8 @@ from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  #
 
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")
-SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds")  # in results.json
+SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # in results.json
+            "start_noise")
 TRIAL_SECONDS = 8.4
 THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
                     "63% of training time saved (random init: 4.6%)",
@@ -83,6 +90,10 @@ class Experiment(Node):
                         c_min=declare("c_min", 1e-7))
         self.tolerance = declare("convergence_tolerance", 0.1)
         self.babbling_seconds = declare("babbling_seconds", 14.4)
+        self.start_noise = float(declare("start_noise", 0.0))
+        if not (np.isfinite(self.start_noise) and self.start_noise >= 0):
+            raise ValueError(f"start_noise must be a finite angle >= 0 (rad), got "
+                             f"{self.start_noise}")
         self.output_dir = Path(declare("output_dir", "."))
         self.timeout = float(declare("call_timeout", 600.0))
         self.spinner = SingleThreadedExecutor()
@@ -100,13 +111,15 @@ class Experiment(Node):
             self.recording.append(msg)
 
     # -- one learner run --------------------------------------------------------------------
-    def learn(self, robot, star, initial_data):
-        """Reset the learner, initialise it, run the trials: (errors, experience, messages)."""
+    def learn(self, robot, star, initial_data, start_offset=()):
+        """Reset the learner, initialise it, run the trials from the centre pose plus
+        ``start_offset``: (errors, experience, messages)."""
         learner = f"/{robot}/{star}"
         self.call(InitialiseLearner, f"{learner}/initialise", samples=to_matrix(initial_data),
                   reset=True)
         self.recording = []
-        answer = self.call(RunTrials, f"{learner}/run_trials", n_trials=self.n_trials)
+        answer = self.call(RunTrials, f"{learner}/run_trials", n_trials=self.n_trials,
+                           start_offset=[float(v) for v in start_offset])
         deadline = time.monotonic() + 5
         while len(self.recording) < self.n_trials and time.monotonic() < deadline:
             self.spinner.spin_once(timeout_sec=0.05)
@@ -139,18 +152,14 @@ class Experiment(Node):
                           + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop)
         run = [c for c in CONDITIONS if c == "uninitialised" or c in self.conditions]
         curves = {f"{r}/{s}/{c}": [] for r in self.robots for s in self.stars for c in run}
+        tasks = [(robot, star) for robot in self.robots for star in self.stars]
         scratch = {}
-        for robot in self.robots:
-            for star in self.stars:
-                empty = np.zeros((0, 4 * self.n_joints[robot]))
-                errors, experience, messages = self.learn(robot, star, empty)
-                scratch[robot, star] = experience[:self.n_source_trials * len(experience)
-                                                  // self.n_trials]
-                scratch[robot, star, "errors"] = errors
-                self.traces[robot, star] = [_trace(messages[0]), _trace(messages[-1])]
-                self.get_logger().info(f"{robot} {star} from scratch: {_mm(errors)}")
         per_seed = len(pair_files) // len(self.seeds)
         for index, seed in enumerate(self.seeds):
+            offsets = {task: self.start_offset(seed, *task) for task in tasks}
+            if self.start_noise > 0 or index == 0:   # else deterministic: the same every seed
+                for task in tasks:
+                    scratch[task] = self.from_scratch(seed, *task, offsets[task])
             sides = [load_correspondences(path)
                      for path in pair_files[index * per_seed:(index + 1) * per_seed]]
             pairs = {robot: np.vstack([side[k] for side in sides])
@@ -165,23 +174,38 @@ class Experiment(Node):
                             continue
                         transferred = self.transfer(
                             f"{source}->{target}/{method.lower()}/seed{seed}",
-                            scratch[source, star])
+                            scratch[source, star][1])
                         data[f"transfer-{method}"] = transferred
                         data[f"own+transfer-{method}"] = np.vstack(   # own babbling last
                             (transferred, pairs[target]))
                     for condition in run[1:]:
                         initial = data[condition]
-                        errors, _, _ = self.learn(target, star, initial)
+                        errors, _, _ = self.learn(target, star, initial,
+                                                  offsets[target, star])
                         curves[f"{target}/{star}/{condition}"].append(errors)
                         self.get_logger().info(f"seed {seed} {target} {star} {condition}: "
                                                f"{_mm(errors)}")
             self.done_seeds.append(seed)
-            for robot in self.robots:     # deterministic: the same curve for every seed
-                for star in self.stars:
-                    curves[f"{robot}/{star}/uninitialised"] = (
-                        [scratch[robot, star, "errors"]] * len(self.done_seeds))
+            for robot, star in tasks:
+                curves[f"{robot}/{star}/uninitialised"].append(scratch[robot, star][0])
             write_outputs(curves, self.traces, self, self.output_dir)   # results so far
         return curves
+
+    def start_offset(self, seed, robot, star):
+        """The seed's joint offsets of the start pose (empty with ``start_noise`` 0)."""
+        if self.start_noise == 0:
+            return np.zeros(0)
+        rng = np.random.default_rng([seed, self.robots.index(robot), self.stars.index(star)])
+        return rng.normal(0.0, self.start_noise, self.n_joints[robot])
+
+    def from_scratch(self, seed, robot, star, offset):
+        """Learning from scratch: (errors, its first ``n_source_trials`` trials' experience);
+        the traces of the first seed's run are kept for Fig. 5-6."""
+        empty = np.zeros((0, 4 * self.n_joints[robot]))
+        errors, experience, messages = self.learn(robot, star, empty, offset)
+        self.traces.setdefault((robot, star), [_trace(messages[0]), _trace(messages[-1])])
+        self.get_logger().info(f"seed {seed} {robot} {star} from scratch: {_mm(errors)}")
+        return errors, experience[:self.n_source_trials * len(experience) // self.n_trials]
 
 
 def _mm(errors):
@@ -236,9 +260,10 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=T
 
 def simulated_seconds(curves, experiment):
     """Simulated time per robot: its trials (learning from scratch runs once, whatever the
-    number of seeds) and the babbling of every seed."""
-    trials = sum(len(runs[0]) if key.endswith("/uninitialised") else sum(map(len, runs))
-                 for key, runs in curves.items() if runs)
+    number of seeds, unless ``start_noise`` > 0) and the babbling of every seed."""
+    once = experiment.start_noise == 0
+    trials = sum(len(runs[0]) if once and key.endswith("/uninitialised")
+                 else sum(map(len, runs)) for key, runs in curves.items() if runs)
     return (trials * TRIAL_SECONDS / len(experiment.robots)
             + len(experiment.done_seeds) * experiment.babbling_seconds)
 
@@ -289,7 +314,8 @@ def write_outputs(curves, traces, experiment, out):
         lines.append(f"  thesis: {THESIS.get(robot, '-')}")
     lines.append("")
     lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
-                 f"{TRIAL_SECONDS} s, learning from scratch once, plus the babbling)")
+                 f"{TRIAL_SECONDS} s, learning from scratch "
+                 f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")
     text = "\n".join(lines) + "\n"
     (out / "report.txt").write_text(text)
     return text
