@@ -19,7 +19,10 @@ and pairs their samples by one of three rules — each thesis domain uses a diff
 
 Each sample is the robot's state after ``steps_per_sample`` physics steps, as the
 concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (backward
-difference of velocities), ``effort`` (one value per joint) and ``ee_x``/``ee_y``/``ee_z``
+difference of velocities over the clock's difference rounded to 1 ns: the difference of two
+float clock readings carries a rounding error that grows with the time already run, and
+LWPR's online learning magnifies such last-digit differences into different curves, so a
+seed's run would depend on what the simulator ran before it), ``effort`` (one value per joint) and ``ee_x``/``ee_y``/``ee_z``
 (end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
 z = (q, x) of a planar arm.
 
@@ -64,7 +67,7 @@ def feature_vector(state, previous, features):
     parts = []
     for name in features:
         if name == "acceleration":
-            dt = state.time - previous.time
+            dt = round(state.time - previous.time, 9)   # not dependent on the time run
             parts.append((np.asarray(state.velocities) - previous.velocities) / dt)
         elif name in TASK_FEATURES:
             parts.append([state.end_effector[TASK_FEATURES.index(name)]])

@@ -93,6 +93,21 @@ def test_feature_vector_and_names_follow_the_requested_order():
     assert set(FEATURES) == set(features)
 
 
+def test_acceleration_does_not_depend_on_how_long_the_clock_has_run():
+    """A simulator's clock is steps x physics_step; the difference of two such readings
+    carries rounding that grows with the time run (10 steps of 1 ms after 57,600 steps
+    differ from 0.01 in the 15th digit), which LWPR magnified into other curves for the same
+    seed (measured on the youBot). The acceleration uses the difference rounded to 1 ns."""
+    accelerations = set()
+    for steps in (0, 14400, 57600, 1000003):
+        previous = types.SimpleNamespace(time=steps * 0.001, velocities=np.array([0.3]))
+        state = types.SimpleNamespace(time=(steps + 10) * 0.001, velocities=np.array([0.7]))
+        accelerations.add(float(feature_vector(state, previous, ("acceleration",))[0]))
+    assert accelerations == {(0.7 - 0.3) / 0.01}
+    raw = {(0.7 - 0.3) / ((s + 10) * 0.001 - s * 0.001) for s in (0, 14400, 57600, 1000003)}
+    assert len(raw) > 1        # without the rounding the four would not agree
+
+
 def test_default_layout_and_same_command_pairs_equal_joint_angles(arms):
     """§3.6: both 2-link arms at the same joint angles; z = (q, x) = 4 columns."""
     pairs, source, target = collect(arms, SLOW, "same_command")

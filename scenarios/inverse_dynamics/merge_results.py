@@ -96,17 +96,19 @@ def merge(run_dirs):
 def check_start_noise(key, by_seed, start_noise):
     """Learning from scratch is the same for every seed without start noise and differs
     between any two seeds with it. A share run with other start noise (a CSV does not say)
-    breaks that, and so does, without start noise, a share run on a machine whose floating
-    point differs (measured: the youBot's final Star 1 error from scratch was 2.31123,
-    2.31217 and 2.31280 mm on the hosts of three sessions); either is refused."""
+    breaks that, and so does, without start noise, a share whose last digits differ (the
+    shares of the 10-seed reference gave the youBot's final Star 1 error from scratch as
+    2.31123, 2.31217 and 2.31280 mm, because the acceleration then depended on how long the
+    simulator's clock had run; another host's floating point can do the same); either is
+    refused."""
     seeds = sorted(by_seed)
     for i, a in enumerate(seeds):
         for b in seeds[i + 1:]:
             same = np.allclose(by_seed[a], by_seed[b], rtol=RTOL, atol=0)
             if same != (start_noise == 0):
                 cause = ("a share ran with other start noise" if same else "a share ran "
-                         "with other start noise or on a host whose floating point differs; "
-                         "join such shares only with start_noise > 0")
+                         "with other start noise, other code or on a host whose floating "
+                         "point differs; join such shares only with start_noise > 0")
                 raise ValueError(f"{key}: seeds {a} and {b} learn from scratch "
                                  f"{'alike' if same else 'differently'}, which runs with "
                                  f"start_noise {start_noise:g} cannot ({cause})")
