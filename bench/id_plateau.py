@@ -168,7 +168,8 @@ def main(argv=None):
 def print_reference_table(args, experiment, scratch_runs):
     """The reference's convergence table for the target, learning from scratch replaced by
     ``scratch_runs`` (star -> curves; module docstring)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scenarios" / "inverse_dynamics"))
+    scenario = Path(__file__).resolve().parent.parent / "scenarios" / "inverse_dynamics"
+    sys.path.insert(0, str(scenario))
     from merge_results import read_run
     from run_experiment import convergence_table
     cells = read_run(args.reference)[1]

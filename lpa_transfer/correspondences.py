@@ -22,8 +22,8 @@ concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (bac
 difference of velocities over the clock's difference rounded to 1 ns: the difference of two
 float clock readings carries a rounding error that grows with the time already run, and
 LWPR's online learning magnifies such last-digit differences into different curves, so a
-seed's run would depend on what the simulator ran before it), ``effort`` (one value per joint) and ``ee_x``/``ee_y``/``ee_z``
-(end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
+seed's run would depend on what the simulator ran before it), ``effort`` (one value per
+joint) and ``ee_x``/``ee_y``/``ee_z`` (end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
 z = (q, x) of a planar arm.
 
 Guided exploration (§6.4.2, Alg. 7) is the fourth way, with its own pairing:

@@ -153,7 +153,7 @@ class InverseDynamicsLearner(Node):
         if len(offset) == 0:
             return self.centre_pose
         offset = np.asarray(offset, dtype=np.float64)
-        if offset.shape != self.centre_pose.shape or not np.isfinite(offset).all():
+        if offset.shape != self.centre_pose.shape:     # home_pose checks the rest
             raise ValueError(f"start_offset needs {len(self.centre_pose)} finite joint values "
                              f"(or none), got {offset.tolist()}")
         return home_pose(self.robot.joint_limits, self.centre_pose + offset,
