@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .simulator import elapsed
+
 
 @dataclass
 class PID:
@@ -80,7 +82,7 @@ class PIDServo:
         torque = self.pid.torque(command, velocity, self.state.positions,
                                  self.state.velocities, dt)
         state = self._step(torque, n_steps)
-        self._last_dt = state.time - self.state.time
+        self._last_dt = elapsed(state, self.state)
         self._last_command, self.state = command, state
         return state
 

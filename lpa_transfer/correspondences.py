@@ -46,6 +46,7 @@ from .guided_exploration import (check_target_range, explored_target, followed_c
                                  guided_exploration, pad_transferred, restrict)
 from .guided_exploration import shared_limits as shared_joint_limits
 from .kinematics import overlapping_limits
+from .simulator import elapsed
 
 PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
 JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
@@ -67,8 +68,8 @@ def feature_vector(state, previous, features):
     parts = []
     for name in features:
         if name == "acceleration":
-            dt = round(state.time - previous.time, 9)   # not dependent on the time run
-            parts.append((np.asarray(state.velocities) - previous.velocities) / dt)
+            parts.append((np.asarray(state.velocities) - previous.velocities)
+                         / elapsed(state, previous))
         elif name in TASK_FEATURES:
             parts.append([state.end_effector[TASK_FEATURES.index(name)]])
         else:
@@ -219,7 +220,7 @@ def run_commands(commands, step, steps_per_sample, features, home, should_stop=N
         state = step(command, steps_per_sample)
         samples.append(feature_vector(state, previous, features))
         previous = state
-    return _rows(samples), previous.time - start.time
+    return _rows(samples), elapsed(previous, start)
 
 
 def collect_correspondences(program, pairing_rule, source, target, step_source, step_target,
@@ -262,7 +263,7 @@ def collect_correspondences(program, pairing_rule, source, target, step_source, 
             on_pair(index, pairs_source[-1], pairs_target[-1])
         source_previous, target_previous = source_state, target_state
     return CorrespondenceSet(_rows(pairs_source), _rows(pairs_target), pairing_rule=pairing_rule,
-                             features=features, sim_time=source_previous.time - source_start.time,
+                             features=features, sim_time=elapsed(source_previous, source_start),
                              complete=complete)
 
 

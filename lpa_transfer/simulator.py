@@ -85,6 +85,18 @@ class SimState:
     end_effector: np.ndarray   # (3,) world position of the last link's frame, m
 
 
+def elapsed(state, previous):
+    """Simulated seconds from ``previous`` to ``state``, rounded to 1 ns.
+
+    Clock readings are step counts times the step length; the float difference of two of them
+    carries a rounding error that grows with the time run (at 57,600 ms steps it changed a
+    sample's 9th digit), so without the rounding the same seed gives other samples depending
+    on how long the simulator ran before. Every difference of two clock readings goes through
+    here (acceleration samples, the PID servo's command velocity).
+    """
+    return round(state.time - previous.time, 9)
+
+
 class RobotSimulator:
     """One fixed-base robot in its own pybullet DIRECT client (see module docstring).
 

@@ -1,4 +1,6 @@
 """Star tasks (thesis §5.5.1), PID feedback and the PID position servo (§5.4.1)."""
+import types
+
 import numpy as np
 import pytest
 
@@ -101,3 +103,26 @@ def test_pid_servo_drives_a_torque_mode_robot_to_position_commands():
             state = servo.step(target, 1)
     assert np.abs(state.positions - target).max() < 0.01
     assert np.abs(state.efforts).max() <= params.effort_limits.max()
+
+
+def test_pid_servo_torques_do_not_depend_on_how_long_the_clock_has_run():
+    """The servo's command velocity divides by the period between two clock readings
+    (steps x 1 ms); their float difference carries rounding that grows with the time run, so
+    the same commands gave other torques after longer runs. It uses the rounded difference."""
+    def torques_from(start_steps):
+        clock, applied = [start_steps], []
+
+        def step(torque, n_steps):
+            applied.append(np.asarray(torque, dtype=np.float64).copy())
+            clock[0] += n_steps
+            return types.SimpleNamespace(time=clock[0] * 0.001, positions=np.zeros(1),
+                                         velocities=np.zeros(1))
+        servo = start_servo(step, 1, PID(kp=1.0, ki=0.0, kd=1.0))
+        for command in (0.1, 0.3, 0.2, 0.7):
+            servo.step([command], 10)
+        return np.concatenate(applied[1:])
+
+    reference = torques_from(0)
+    assert reference[2] == pytest.approx(1.0 * 0.2 + 1.0 * (0.2 - 0.3) / 0.01)
+    for start_steps in (14400, 57600, 1000003):
+        np.testing.assert_array_equal(torques_from(start_steps), reference)
