@@ -10,8 +10,8 @@ from conftest import ROOT
 pytest.importorskip("rclpy")
 sys.path.insert(0, str(ROOT / "scenarios" / "inverse_dynamics"))
 from merge_results import main as merge_main, merge  # noqa: E402
-from run_experiment import (CONDITIONS, TRIAL_SECONDS, convergence_table,  # noqa: E402
-                            trials_to_convergence)
+from run_experiment import (CONDITIONS, TRIAL_SECONDS, bootstrap_savings,  # noqa: E402
+                            convergence_table, trials_to_convergence)
 
 SETTINGS = {"robots": ["a", "b"], "stars": ["star1"], "n_trials": 3, "tolerance": 0.1,
             "babbling_seconds": 2.0}
@@ -37,6 +37,27 @@ def test_time_saved_counts_trials_and_babbling_like_the_thesis():
     # results written before the own+transfer conditions existed have no such rows
     assert {row[2] for row in rows} == set(CONDITIONS[:4]) and set(savings["a"]) == {
         "random", "transfer-PA", "transfer-LPA"}
+
+
+def test_bootstrap_over_seeds_brackets_the_saving_and_counts_who_saves_more():
+    """Seeds that all agree give a zero-width interval at the saving; a condition that
+    converges a trial earlier than random on every seed saves more in every resample."""
+    same = {"a/star1/uninitialised": [[4.0, 2.0, 1.0]] * 4,
+            "a/star1/random": [[2.0, 1.0, 1.0]] * 4, "a/star1/transfer-PA": [[1.0, 1.0, 1.0]] * 4}
+    _, savings = convergence_table(same, ["a"], ["star1"], 0.1, 2.0)
+    summary = bootstrap_savings(same, ["a"], ["star1"], 0.1, 2.0, n_resamples=50)
+    low, high, more, as_much, less = summary["a"]["transfer-PA"]
+    assert low == high == pytest.approx(savings["a"]["transfer-PA"])
+    assert (more, as_much, less) == (1.0, 0.0, 0.0)
+    assert np.isnan(summary["a"]["random"][2:]).all()
+    # seeds that disagree: transfer-PA converges at trial 1 on two seeds, at trial 3 on two
+    mixed = dict(same, **{"a/star1/transfer-PA": [[1.0, 1.0, 1.0]] * 2 + [[3.0, 3.0, 1.0]] * 2})
+    low, high, more, as_much, less = bootstrap_savings(mixed, ["a"], ["star1"], 0.1, 2.0,
+                                                       n_resamples=400)["a"]["transfer-PA"]
+    assert low < savings["a"]["random"] < high and 0 < more < 1 and 0 < less < 1
+    assert more + as_much + less == pytest.approx(1.0)
+    again = bootstrap_savings(mixed, ["a"], ["star1"], 0.1, 2.0, n_resamples=400)
+    assert again["a"]["transfer-PA"] == (low, high, more, as_much, less)     # seeded
 
 
 def write_run(path, seeds, offset, settings=SETTINGS, conditions=CONDITIONS):

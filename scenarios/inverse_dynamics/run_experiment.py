@@ -64,6 +64,7 @@ CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+tra
 SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # in results.json
             "start_noise")
 TRIAL_SECONDS = 8.4
+BOOTSTRAP_RESAMPLES = 2000
 THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
                     "63% of training time saved (random init: 4.6%)",
           "pincher": "58.7% of training time saved (random init: 15.8%)"}
@@ -258,6 +259,35 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=T
     return rows, savings
 
 
+def bootstrap_savings(curves, robots, stars, tolerance, babbling_seconds, n_resamples=2000,
+                      seed=0, reference="random"):
+    """How sure the time saved is, given the seeds: :func:`convergence_table`'s savings over
+    ``n_resamples`` resamples of the seeds (drawn with replacement, the same seeds for every
+    condition, as every seed ran all of them). Per target robot and initialised condition:
+    ``(low, high, beats)``, the 2.5 and 97.5 percentiles of its saving and the share of
+    resamples in which it saves more than, as much as and less than ``reference`` (nan for
+    ``reference`` itself)."""
+    n_seeds = len(next(iter(curves.values())))
+    rng = np.random.default_rng(seed)
+    draws = {}
+    for _ in range(n_resamples):
+        picks = rng.integers(n_seeds, size=n_seeds)
+        _, savings = convergence_table({key: np.asarray(runs)[picks] for key, runs in
+                                        curves.items()}, robots, stars, tolerance,
+                                       babbling_seconds)
+        for robot, saved in savings.items():
+            for condition, value in saved.items():
+                draws.setdefault(robot, {}).setdefault(condition, []).append(value)
+    summary = {}
+    for robot, by_condition in draws.items():
+        base = np.asarray(by_condition.get(reference, np.nan))
+        summary[robot] = {c: (*np.percentile(v, [2.5, 97.5]), *(
+            (np.mean(np.asarray(v) > base), np.mean(np.asarray(v) == base),
+             np.mean(np.asarray(v) < base)) if c != reference and reference in by_condition
+            else 3 * (float("nan"),))) for c, v in by_condition.items()}
+    return summary
+
+
 def simulated_seconds(curves, experiment):
     """Simulated time per robot: its trials (learning from scratch runs once, whatever the
     number of seeds, unless ``start_noise`` > 0) and the babbling of every seed."""
@@ -288,6 +318,7 @@ def write_outputs(curves, traces, experiment, out):
             experiment.babbling_seconds)
     rows, savings = convergence_table(*args)
     first_rows, first_savings = convergence_table(*args, stay=False)
+    intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
     lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s) "
              f"({', '.join(map(str, experiment.done_seeds))}), "
              f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
@@ -311,6 +342,14 @@ def write_outputs(curves, traces, experiment, out):
                                                 for c, v in savings[robot].items()))
         lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
                                                     for c, v in first_savings[robot].items()))
+        lines.append(f"  95% interval over seeds (bootstrap, {BOOTSTRAP_RESAMPLES} resamples of "
+                     f"the seeds), converged: " + ", ".join(
+                         f"{c} [{100 * low:.1f}, {100 * high:.1f}]%"
+                         for c, (low, high, *_) in intervals[robot].items()))
+        lines.append("  share of resamples saving more / as much / less than random: "
+                     + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
+                                 for c, (_, _, more, same, less) in intervals[robot].items()
+                                 if c != "random"))
         lines.append(f"  thesis: {THESIS.get(robot, '-')}")
     lines.append("")
     lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
