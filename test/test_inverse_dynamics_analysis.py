@@ -90,6 +90,13 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     assert merged["seeds"] == [0, 2, 1] and merged["settings"] == dict(SETTINGS, start_noise=0.0)
     report = (tmp_path / "all" / "report.txt").read_text()
     assert "3 seed(s) (0, 2, 1)" in report
+    # the made-up mean curves of the initialised conditions never converge, at any tolerance
+    never = 100 * (1 - (4 * TRIAL_SECONDS + 2.0) / (3 * TRIAL_SECONDS))
+    assert (f"converged within 5% / 20% of scratch's final error instead: random {never:.1f} / "
+            f"{never:.1f}%") in report
+    # ... but resamples that draw seed 0 alone (its curves equal scratch's) converge at trial 3
+    assert (f"bootstrap, 2000 resamples of the seeds), converged: random [{never:.1f}, "
+            f"{100 * (1 - (3 * TRIAL_SECONDS + 2.0) / (3 * TRIAL_SECONDS)):.1f}]%") in report
     # per robot: 3 trials from scratch once, 5 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
     assert f"simulated: {(3 + 45) * 8.4 + 6:.0f} s per robot" in report
     for name in ("learning_curves.csv", "fig5_7_5_8_learning_curves.png", "fig5_6_traces.png"):
