@@ -383,14 +383,19 @@ def plot_curves(curves, experiment, path):
                 line, = ax.plot(trials, mean, marker="o", ms=3, label=condition,
                                 linestyle="--" if condition.startswith("own+") else "-")
                 ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
-                                alpha=0.2)
+                                alpha=0.15)
+            final = np.mean(curves[f"{robot}/{star}/uninitialised"], axis=0)[-1] * 1e3
+            ax.axhline((1 + experiment.tolerance) * final, color="black", linewidth=0.8,
+                       linestyle=":", label=f"converged: within {experiment.tolerance:.0%} "
+                                            f"of scratch's final")
             ax.set(title=f"{robot} learning {star}", xlabel="trial",
                    ylabel="tracking error (mm, log scale)", yscale="log")
             ax.yaxis.set_major_formatter(ScalarFormatter())   # 2, 3, 5 mm, not 2×10⁰
             ax.yaxis.set_minor_formatter(ScalarFormatter())
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
-    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s)")
+    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s) "
+                 f"(a trial is 8.4 s)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
