@@ -21,13 +21,14 @@ was initialised; and how far the learner's own task data lie from the desired st
 median over its samples of the distance of (q, q̇, q̈) to the nearest desired state of the
 star (normalised input units), in all trials and in the last one.
 
-``--swap`` then separates the initial data from the data each learner collected: four fresh
-learners (``norm_out=1`` so that all four scale alike), initialised with nothing or with the
-random data, then given offline, in order, the task experience that the uninitialised or the
-random learner collected in its trials, and evaluated on one trial without learning. If the
-initial data harm the model, the random-initialised learners are worse on the same
-experience; if the experience is what differs, the learners given the random learner's
-experience are worse whatever their initialisation.
+``--swap`` then separates the initial data from the data each learner collected: for every
+pair of ``--conditions``, a fresh learner (``norm_out=1`` so that all scale alike) initialised
+with the first condition's initial data, then given offline, in order, the task experience
+that the second condition's learner collected in its trials, and evaluated on one trial
+without learning (with the default conditions, 3 x 3). If some initial data harm the model,
+the learners initialised with them are worse on the same experience; if the experience is
+what differs, the learners given one condition's experience are worse whatever their
+initialisation.
 
 ``--start-noise SIGMA`` asks how much learning from scratch itself varies: it is one
 deterministic run, whereas the initialised conditions vary with the babbling seed. ``--starts``
@@ -110,7 +111,7 @@ def main(argv=None):
     parser.add_argument("--conditions", nargs="+",
                         default=["uninitialised", "random", "own+transfer-PA"])
     parser.add_argument("--swap", action="store_true",
-                        help="the 2 x 2 of initial data and collected experience (docstring)")
+                        help="the table of initial data x collected experience (docstring)")
     parser.add_argument("--start-noise", type=float, default=0.0,
                         help="rad; > 0 adds the perturbed scratch runs (docstring)")
     parser.add_argument("--starts", type=int, default=4)
@@ -206,9 +207,9 @@ def perturbed_starts(robot, overrides, args):
 
 
 def swap(robot, overrides, initial, collected):
-    """Print the frozen one-trial errors of the ``--swap`` 2 x 2 (module docstring)."""
-    for start in ("uninitialised", "random"):
-        for source in ("uninitialised", "random"):
+    """Print the frozen one-trial errors of the ``--swap`` table (module docstring)."""
+    for start in collected:
+        for source in collected:
             model = learner(robot, overrides, initial[start])
             model.initialise(collected[source])
             model.learn = False
