@@ -11,7 +11,7 @@ pytest.importorskip("rclpy")
 sys.path.insert(0, str(ROOT / "scenarios" / "inverse_dynamics"))
 from merge_results import main as merge_main, merge  # noqa: E402
 from run_experiment import (CONDITIONS, TRIAL_SECONDS, bootstrap_savings,  # noqa: E402
-                            convergence_table, trials_to_convergence)
+                            convergence_table, paired_against, trials_to_convergence)
 
 SETTINGS = {"robots": ["a", "b"], "stars": ["star1"], "n_trials": 3, "tolerance": 0.1,
             "babbling_seconds": 2.0}
@@ -60,6 +60,28 @@ def test_bootstrap_over_seeds_brackets_the_saving_and_counts_who_saves_more():
     assert again["a"]["transfer-PA"] == (low, high, more, as_much, less)     # seeded
 
 
+def test_paired_comparison_counts_the_seeds_each_condition_beats_random_in():
+    """Seed by seed against random: lower early on every seed of 6 gives Wilcoxon's exact
+    two-sided p = 2 / 2^6; a condition equal to random on every seed has no p."""
+    random = [[3.0 + seed, 2.0, 1.0] for seed in range(6)]
+    curves = {"a/star1/uninitialised": [[9.0, 5.0, 1.0]] * 6, "a/star1/random": random,
+              "a/star1/transfer-PA": [[2.0 + seed, 2.0, 1.0] for seed in range(6)],
+              "a/star1/transfer-LPA": random,
+              "a/star1/own+transfer-PA": [[3.0 + seed, 2.0, 1.0 + (seed % 2) - 0.5]
+                                          for seed in range(6)]}
+    table = paired_against(curves, ["a"], ["star1"], early_trials=2)
+    assert set(table) == {("a", "star1", c) for c in
+                          ("transfer-PA", "transfer-LPA", "own+transfer-PA")}
+    (lower, n, p), (lower_all, _, p_all) = table["a", "star1", "transfer-PA"]
+    assert (lower, n, lower_all) == (6, 6, 6) and p == pytest.approx(2 / 2 ** 6)
+    assert p_all == pytest.approx(p)
+    (lower, n, p), _ = table["a", "star1", "transfer-LPA"]
+    assert (lower, n) == (0, 6) and np.isnan(p)
+    # equal over the first two trials, lower in the last on half of the seeds
+    early, whole = table["a", "star1", "own+transfer-PA"]
+    assert early[0] == 0 and np.isnan(early[2]) and whole[0] == 3 and 0.5 < whole[2] <= 1
+
+
 def write_run(path, seeds, offset, settings=SETTINGS, conditions=CONDITIONS):
     """Made-up curves; learning from scratch is the same for every seed unless the settings
     have start noise, as in the experiment."""
@@ -97,6 +119,9 @@ def test_merging_runs_of_other_seeds_gives_the_outputs_of_one_run(tmp_path):
     # ... but resamples that draw seed 0 alone (its curves equal scratch's) converge at trial 3
     assert (f"bootstrap, 2000 resamples of the seeds), converged: random [{never:.1f}, "
             f"{100 * (1 - (3 * TRIAL_SECONDS + 2.0) / (3 * TRIAL_SECONDS)):.1f}]%") in report
+    # made-up curves: every condition equals random on every seed, so no seed is lower
+    assert "paired over seeds against random" in report
+    assert "a         star1  transfer-PA       0/3 (p nan),   0/3 (p nan)" in report
     # per robot: 3 trials from scratch once, 5 conditions x 3 seeds x 3 trials, 3 x 2 s babbling
     assert f"simulated: {(3 + 45) * 8.4 + 6:.0f} s per robot" in report
     for name in ("learning_curves.csv", "fig5_7_5_8_learning_curves.png", "fig5_6_traces.png"):

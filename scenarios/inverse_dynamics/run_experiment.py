@@ -289,6 +289,48 @@ def bootstrap_savings(curves, robots, stars, tolerance, babbling_seconds, n_resa
     return summary
 
 
+def paired_against(curves, robots, stars, early_trials=5, reference="random"):
+    """Each initialised condition against ``reference`` seed by seed (a seed's conditions
+    share its start and its babbling, so they pair): per robot, star and condition, for the
+    mean error over the first ``early_trials`` trials and over all trials, ``(lower, n, p)``:
+    in how many of the ``n`` seeds the condition's error is below the reference's, and the
+    two-sided p of Wilcoxon's signed-rank test on the paired differences (nan with fewer than
+    two seeds or no difference)."""
+    from scipy.stats import wilcoxon
+
+    def compare(ours, theirs):
+        diff = np.asarray(ours) - np.asarray(theirs)
+        p = float("nan")
+        if len(diff) >= 2 and np.any(diff != 0):
+            p = float(wilcoxon(diff).pvalue)
+        return int(np.sum(diff < 0)), len(diff), p
+
+    table = {}
+    for robot in robots:
+        for star in stars:
+            base = np.asarray(curves[f"{robot}/{star}/{reference}"])
+            for condition in conditions_in(curves)[1:]:
+                if condition == reference:
+                    continue
+                runs = np.asarray(curves[f"{robot}/{star}/{condition}"])
+                table[robot, star, condition] = (
+                    compare(runs[:, :early_trials].mean(1), base[:, :early_trials].mean(1)),
+                    compare(runs.mean(1), base.mean(1)))
+    return table
+
+
+def paired_lines(curves, robots, stars, early_trials=5, reference="random"):
+    """The report's lines of :func:`paired_against`."""
+    lines = [f"paired over seeds against {reference}: seeds in which the condition's mean error "
+             f"is lower / seeds (Wilcoxon signed-rank p), over trials 1-{early_trials} and over "
+             f"all trials"]
+    for (robot, star, condition), (early, whole) in paired_against(
+            curves, robots, stars, early_trials, reference).items():
+        lines.append(f"  {robot:<9} {star:<6} {condition:<16} " + ",  ".join(
+            f"{lower:>2}/{n} (p {p:.3f})" for lower, n, p in (early, whole)))
+    return lines
+
+
 def simulated_seconds(curves, experiment):
     """Simulated time per robot: its trials (learning from scratch runs once, whatever the
     number of seeds, unless ``start_noise`` > 0) and the babbling of every seed."""
@@ -361,6 +403,8 @@ def write_outputs(curves, traces, experiment, out):
                                  if c != "random"))
         lines.append(f"  thesis: {THESIS.get(robot, '-')}")
     lines.append("")
+    if "random" in conditions_in(curves):
+        lines += paired_lines(curves, experiment.robots, experiment.stars) + [""]
     lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
                  f"{TRIAL_SECONDS} s, learning from scratch "
                  f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")

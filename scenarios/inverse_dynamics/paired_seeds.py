@@ -1,0 +1,28 @@
+#!/usr/bin/env python3
+"""Print the report's paired comparison (each condition against 'random', seed by seed) for
+a run directory or a reference result (its results.json or learning_curves.csv).
+
+Usage: ``python scenarios/inverse_dynamics/paired_seeds.py RUN_DIR [EARLY_TRIALS]``
+(after ``source tools/env.sh``; EARLY_TRIALS defaults to 5).
+"""
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from merge_results import read_run  # noqa: E402
+from run_experiment import paired_lines  # noqa: E402
+
+
+def main(argv):
+    if len(argv) not in (2, 3):
+        print(__doc__, file=sys.stderr)
+        return 2
+    settings, cells, _ = read_run(argv[1])
+    curves = {key: [by_seed[seed] for seed in sorted(by_seed)] for key, by_seed in cells.items()}
+    early = int(argv[2]) if len(argv) == 3 else 5
+    print("\n".join(paired_lines(curves, settings["robots"], settings["stars"], early)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
