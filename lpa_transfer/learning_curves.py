@@ -40,3 +40,46 @@ def time_saved(scratch_times, scratch_values, times, values, higher_is_better=Tr
     t = time_to_reach(times, values, level, higher_is_better)
     saved = 1.0 - t / t_scratch if np.isfinite(t_scratch) else float("nan")
     return level, t_scratch, t, saved
+
+
+def paired_comparison(values, reference):
+    """Two conditions seed by seed: ``values[i]`` and ``reference[i]`` come from the same seed
+    (which fixes the randomness both conditions share, e.g. a start or a babbling run), so the
+    differences pair. Returns ``(above, below, n, p)``: in how many of the ``n`` seeds the
+    value is above and below the reference, and the two-sided p of Wilcoxon's signed-rank
+    test on the differences (zero differences dropped; nan with fewer than two pairs or none
+    that differ). Whether above is better depends on the measure (a rate, an error)."""
+    from scipy.stats import wilcoxon
+
+    values, reference = np.asarray(values, np.float64), np.asarray(reference, np.float64)
+    if values.ndim != 1 or values.shape != reference.shape or not len(values):
+        raise ValueError(f"values and reference must be non-empty 1-D arrays of one length, "
+                         f"got shapes {values.shape} and {reference.shape}")
+    if not (np.isfinite(values).all() and np.isfinite(reference).all()):
+        raise ValueError("values and reference must be finite")
+    diff = values - reference
+    p = float("nan")
+    if len(diff) >= 2 and np.count_nonzero(diff):
+        p = float(wilcoxon(diff, zero_method="wilcox").pvalue)
+    return int(np.sum(diff > 0)), int(np.sum(diff < 0)), len(diff), p
+
+
+def rank_sum_comparison(values, reference):
+    """Two conditions whose runs share no randomness (unpaired): ``(share_above, p)``, the
+    share of (run, reference run) pairs in which the run's value is above the reference's
+    (ties count half: the probability of superiority, 0.5 when the two spread alike) and the
+    two-sided p of the Mann-Whitney U test (nan with fewer than two runs on either side)."""
+    from scipy.stats import mannwhitneyu
+
+    values, reference = np.asarray(values, np.float64), np.asarray(reference, np.float64)
+    if values.ndim != 1 or reference.ndim != 1 or not (len(values) and len(reference)):
+        raise ValueError(f"values and reference must be non-empty 1-D arrays, got shapes "
+                         f"{values.shape} and {reference.shape}")
+    if not (np.isfinite(values).all() and np.isfinite(reference).all()):
+        raise ValueError("values and reference must be finite")
+    diff = values[:, None] - reference[None, :]
+    share = float(np.mean((diff > 0) + 0.5 * (diff == 0)))
+    p = float("nan")
+    if len(values) >= 2 and len(reference) >= 2:
+        p = float(mannwhitneyu(values, reference, alternative="two-sided").pvalue)
+    return share, p

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from lpa_transfer.learning_curves import time_saved, time_to_reach
+from lpa_transfer.learning_curves import (paired_comparison, rank_sum_comparison, time_saved,
+                                          time_to_reach)
 
 TIMES = np.array([300.0, 600.0, 900.0, 1200.0, 1500.0])
 
@@ -41,3 +42,32 @@ def test_time_saved_at_a_given_level():
 def test_bad_curves_are_refused(times, values):
     with pytest.raises(ValueError):
         time_to_reach(times, values, 0.5)
+
+
+def test_paired_comparison_counts_seeds_and_gives_wilcoxons_exact_p():
+    above, below, n, p = paired_comparison([2, 3, 4, 5, 6, 7], [1, 1, 1, 1, 1, 1])
+    assert (above, below, n) == (6, 0, 6) and p == pytest.approx(2 / 2 ** 6)
+    # one seed of six ties: it is dropped, the five others give 2 / 2^5
+    assert paired_comparison([1, 3, 4, 5, 6, 7], [1] * 6) == (5, 0, 6, pytest.approx(2 / 2 ** 5))
+    mixed = paired_comparison([1, 2, 3, 4], [2, 1, 4, 3])
+    assert mixed[:3] == (2, 2, 4) and mixed[3] > 0.5
+    assert np.isnan(paired_comparison([1.0, 2.0], [1.0, 2.0])[3])       # nothing differs
+    assert np.isnan(paired_comparison([1.0], [0.0])[3])                 # one pair
+
+
+def test_rank_sum_comparison_is_the_share_of_pairs_above_and_mann_whitneys_p():
+    share, p = rank_sum_comparison([5, 6, 7], [1, 2, 3, 4])
+    assert share == 1.0 and p == pytest.approx(2 / 35)    # exact: 2 of C(7, 3) orderings
+    share, p = rank_sum_comparison([1, 2, 3], [1, 2, 3])
+    assert share == 0.5 and p == pytest.approx(1.0)
+    assert np.isnan(rank_sum_comparison([1.0], [0.0, 2.0])[1])
+
+
+@pytest.mark.parametrize("compare", [paired_comparison, rank_sum_comparison])
+def test_comparisons_refuse_bad_input(compare):
+    with pytest.raises(ValueError, match="finite"):
+        compare([1.0, np.nan], [1.0, 2.0])
+    with pytest.raises(ValueError, match="1-D"):
+        compare([[1.0, 2.0]], [1.0, 2.0])
+    with pytest.raises(ValueError, match="1-D"):
+        compare([], [])

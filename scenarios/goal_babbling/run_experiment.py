@@ -52,7 +52,7 @@ from lpa_transfer.babbling import robot_kinematics  # noqa: E402
 from lpa_transfer.correspondences import load_guided_exploration  # noqa: E402
 from lpa_transfer.goal_babbling_experiment import derived_seeds  # noqa: E402
 from lpa_transfer.kinematics import sample_joint_uniform  # noqa: E402
-from lpa_transfer.learning_curves import time_saved  # noqa: E402
+from lpa_transfer.learning_curves import rank_sum_comparison, time_saved  # noqa: E402
 from lpa_transfer.reaching import evaluation_points  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer.transfer_babbling import padded_rows  # noqa: E402
@@ -230,8 +230,34 @@ def report_lines(curves, experiment):
               "at that time (0 before its first evaluation)", "",
               "mean reaching rate at every evaluation (learning time in s):",
               f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
-    lines += every_evaluation + [""] + level_lines(curves, times, scratch_rate) + \
-        ["", experiment.thesis]
+    lines += every_evaluation + [""] + level_lines(curves, times, scratch_rate) + [""] + \
+        comparison_lines(curves, times) + ["", experiment.thesis]
+    return lines
+
+
+def comparison_lines(curves, times):
+    """Each condition against scratch at each of scratch's evaluations, over the seeds: the
+    share of (run, scratch run) pairs in which the run's reaching rate is higher, and the
+    Mann-Whitney p (:func:`lpa_transfer.learning_curves.rank_sum_comparison`; unpaired: a
+    seed's scratch run and its transfer runs babble with different derived seeds). Says
+    whether a lead or a lag of the mean curves is more than the seeds' spread."""
+    lines = ["against scratch over the seeds: share of (run, scratch run) pairs with a higher "
+             "reaching rate, and the two-sided Mann-Whitney p, at every evaluation (learning "
+             "time in s):", f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
+    scratch = {round(float(x), 6): [run["rate"][i] for run in curves["scratch"]]
+               for i, x in enumerate(times)}
+    for name, runs in curves.items():
+        if name == "scratch":
+            continue
+        cells = {}
+        for i, x in enumerate(runs[0]["times"]):
+            if round(float(x), 6) in scratch:
+                cells[round(float(x), 6)] = rank_sum_comparison(
+                    [run["rate"][i] for run in runs], scratch[round(float(x), 6)])
+        for label, column, digits in ((name, 0, 2), ("  p", 1, 3)):
+            lines.append(f"{label:<22} " + " ".join(
+                f"{cells[round(float(x), 6)][column]:5.{digits}f}"
+                if round(float(x), 6) in cells else "    -" for x in times))
     return lines
 
 

@@ -52,6 +52,7 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.learning_curves import paired_comparison  # noqa: E402
 from lpa_transfer.robot_params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
@@ -293,17 +294,11 @@ def paired_against(curves, robots, stars, early_trials=5, reference="random"):
     """Each initialised condition against ``reference`` seed by seed (a seed's conditions
     share its start and its babbling, so they pair): per robot, star and condition, for the
     mean error over the first ``early_trials`` trials and over all trials, ``(lower, n, p)``:
-    in how many of the ``n`` seeds the condition's error is below the reference's, and the
-    two-sided p of Wilcoxon's signed-rank test on the paired differences (nan with fewer than
-    two seeds or no difference)."""
-    from scipy.stats import wilcoxon
-
+    in how many of the ``n`` seeds the condition's error is below the reference's, and
+    :func:`lpa_transfer.learning_curves.paired_comparison`'s p (Wilcoxon signed-rank)."""
     def compare(ours, theirs):
-        diff = np.asarray(ours) - np.asarray(theirs)
-        p = float("nan")
-        if len(diff) >= 2 and np.any(diff != 0):
-            p = float(wilcoxon(diff).pvalue)
-        return int(np.sum(diff < 0)), len(diff), p
+        _, lower, n, p = paired_comparison(ours, theirs)
+        return lower, n, p
 
     table = {}
     for robot in robots:
