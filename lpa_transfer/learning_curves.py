@@ -42,6 +42,20 @@ def time_saved(scratch_times, scratch_values, times, values, higher_is_better=Tr
     return level, t_scratch, t, saved
 
 
+def _runs(values, reference, same_length):
+    """Two conditions' results over runs as finite, non-empty 1-D float arrays (of one length
+    when ``same_length``); ValueError otherwise."""
+    values, reference = np.asarray(values, np.float64), np.asarray(reference, np.float64)
+    if values.ndim != 1 or reference.ndim != 1 or not (len(values) and len(reference)) \
+            or (same_length and values.shape != reference.shape):
+        raise ValueError(f"values and reference must be non-empty 1-D arrays"
+                         f"{' of one length' if same_length else ''}, got shapes "
+                         f"{values.shape} and {reference.shape}")
+    if not (np.isfinite(values).all() and np.isfinite(reference).all()):
+        raise ValueError("values and reference must be finite")
+    return values, reference
+
+
 def paired_comparison(values, reference):
     """Two conditions seed by seed: ``values[i]`` and ``reference[i]`` come from the same seed
     (which fixes the randomness both conditions share, e.g. a start or a babbling run), so the
@@ -51,12 +65,7 @@ def paired_comparison(values, reference):
     that differ). Whether above is better depends on the measure (a rate, an error)."""
     from scipy.stats import wilcoxon
 
-    values, reference = np.asarray(values, np.float64), np.asarray(reference, np.float64)
-    if values.ndim != 1 or values.shape != reference.shape or not len(values):
-        raise ValueError(f"values and reference must be non-empty 1-D arrays of one length, "
-                         f"got shapes {values.shape} and {reference.shape}")
-    if not (np.isfinite(values).all() and np.isfinite(reference).all()):
-        raise ValueError("values and reference must be finite")
+    values, reference = _runs(values, reference, same_length=True)
     diff = values - reference
     p = float("nan")
     if len(diff) >= 2 and np.count_nonzero(diff):
@@ -71,12 +80,7 @@ def rank_sum_comparison(values, reference):
     two-sided p of the Mann-Whitney U test (nan with fewer than two runs on either side)."""
     from scipy.stats import mannwhitneyu
 
-    values, reference = np.asarray(values, np.float64), np.asarray(reference, np.float64)
-    if values.ndim != 1 or reference.ndim != 1 or not (len(values) and len(reference)):
-        raise ValueError(f"values and reference must be non-empty 1-D arrays, got shapes "
-                         f"{values.shape} and {reference.shape}")
-    if not (np.isfinite(values).all() and np.isfinite(reference).all()):
-        raise ValueError("values and reference must be finite")
+    values, reference = _runs(values, reference, same_length=False)
     diff = values[:, None] - reference[None, :]
     share = float(np.mean((diff > 0) + 0.5 * (diff == 0)))
     p = float("nan")

@@ -244,20 +244,19 @@ def comparison_lines(curves, times):
     lines = ["against scratch over the seeds: share of (run, scratch run) pairs with a higher "
              "reaching rate, and the two-sided Mann-Whitney p, at every evaluation (learning "
              "time in s):", f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
-    scratch = {round(float(x), 6): [run["rate"][i] for run in curves["scratch"]]
-               for i, x in enumerate(times)}
+    keys = [round(float(x), 6) for x in times]
+    scratch = {key: [run["rate"][i] for run in curves["scratch"]] for i, key in enumerate(keys)}
     for name, runs in curves.items():
         if name == "scratch":
             continue
-        cells = {}
-        for i, x in enumerate(runs[0]["times"]):
-            if round(float(x), 6) in scratch:
-                cells[round(float(x), 6)] = rank_sum_comparison(
-                    [run["rate"][i] for run in runs], scratch[round(float(x), 6)])
+        rates = {round(float(x), 6): [run["rate"][i] for run in runs]
+                 for i, x in enumerate(runs[0]["times"])}
+        cells = {key: rank_sum_comparison(rates[key], scratch[key])
+                 for key in keys if key in rates}
         for label, column, digits in ((name, 0, 2), ("  p", 1, 3)):
             lines.append(f"{label:<22} " + " ".join(
-                f"{cells[round(float(x), 6)][column]:5.{digits}f}"
-                if round(float(x), 6) in cells else "    -" for x in times))
+                f"{cells[key][column]:5.{digits}f}" if key in cells else "    -"
+                for key in keys))
     return lines
 
 
