@@ -13,4 +13,4 @@ test:
 	bash tools/run_tests.sh $(ARGS)
 
 bench: setup
-	bash -c 'source tools/env.sh && exec python bench/bench_lpa.py "$$@"' bench $(ARGS)
+	bash -c 'source tools/env.sh && exec python -m bench.bench_lpa "$$@"' bench $(ARGS)

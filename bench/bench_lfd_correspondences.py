@@ -1,9 +1,9 @@
 """Collecting human -> robot correspondences (thesis §4.4.2): the demonstrator's IK for every
 babbled robot point, solved one point at a time (inverse_kinematics.solve) or all at once
-(inverse_kinematics.solve_many, what collect_correspondences uses), on the Meka and the PR2
+(inverse_kinematics.solve_many, what collect_demonstrator_correspondences uses), on the Meka and the PR2
 of scenarios/lfd/frames.yaml; then the whole collect_pairs for 20 000 pairs.
 
-    python bench/bench_lfd_correspondences.py [--points 1000] [--pairs 20000]
+    python -m bench.bench_lfd_correspondences [--points 1000] [--pairs 20000]
 """
 import argparse
 import time
@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.inverse_kinematics import solve, solve_many
-from lpa_transfer.kinematics import sample_joint_uniform
-from lpa_transfer.lfd_correspondences import arm_kinematics, babbling_limits
-from lpa_transfer.lfd_experiment import collect_pairs, load_setup
+from lpa_transfer.robots.inverse_kinematics import solve, solve_many
+from lpa_transfer.robots.kinematics import sample_joint_uniform
+from lpa_transfer.robots.kinematics import arm_kinematics
+from lpa_transfer.lfd.correspondences import babbling_limits
+from lpa_transfer.lfd.experiment import collect_pairs, load_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,7 +47,7 @@ def main():
         _, residuals = solve_many(forward, targets, starts, limits)
         batched = time.perf_counter() - started
         single_residuals = np.array([r for _, r in one])
-        kept = single_residuals <= 1e-4      # collect_correspondences' default ik_tolerance
+        kept = single_residuals <= 1e-4      # collect_demonstrator_correspondences' default ik_tolerance
         same = np.abs(single_residuals - residuals)[kept].max(initial=0.0)
         flipped = int((kept != (residuals <= 1e-4)).sum())
         started = time.perf_counter()

@@ -11,7 +11,7 @@ Single-threaded (OMP/OpenBLAS/MKL threads = 1, set before numpy is imported). Ca
   of the transferred target torques against the true ones.
 
 Times are medians of ``--repeats`` runs (library) and ``--reference-repeats`` runs
-(reference), ``time.perf_counter``. Usage: ``python bench/bench_lpa.py [--quick]``.
+(reference), ``time.perf_counter``. Usage: ``python -m bench.bench_lpa [--quick]``.
 """
 import os
 
@@ -20,15 +20,12 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import platform  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench import datasets  # noqa: E402
 from bench.reference_lpa import ReferenceLPA  # noqa: E402
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis  # noqa: E402

@@ -23,7 +23,7 @@ output, and the online nMSE of the predictions made before learning (per output,
 
 Hyperparameters: init_D 30 and init_alpha 0.01 (the thesis' youBot values), other LWPR
 defaults; norm_in / norm_out are the standard deviations of the training batch (the
-default ``None``). Usage: ``python bench/bench_lwpr.py [--quick] [--cycles N]``.
+default ``None``). Usage: ``python -m bench.bench_lwpr [--quick] [--cycles N]``.
 """
 import os
 
@@ -33,17 +33,14 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import copy  # noqa: E402
 import platform  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench import datasets  # noqa: E402
-from lpa_transfer.lwpr import LWPR  # noqa: E402
-from lpa_transfer.planar_chain import babbling_trajectory, inverse_dynamics  # noqa: E402
+from lpa_transfer.learners.lwpr import LWPR  # noqa: E402
+from lpa_transfer.robots.planar_chain import babbling_trajectory, inverse_dynamics  # noqa: E402
 
 HYPERPARAMETERS = dict(init_D=30.0, init_alpha=0.01)
 N_TRAIN, TRIAL_SAMPLES, TRIAL_NOISE = 16_800, 840, 0.02

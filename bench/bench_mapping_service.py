@@ -15,7 +15,7 @@ latent_dim 16, n_min 40, c_min 1e-7, cluster_dims 0-9, as in bench_lpa.py), then
   copying rclpy does on both sides.
 The rest of end to end is DDS transport and the executors. Goal (issue 3): < 100 ms.
 
-Usage: ``python bench/bench_mapping_service.py [--calls 15]`` (from the repository root).
+Usage: ``python -m bench.bench_mapping_service [--calls 15]`` (from the repository root).
 """
 import os
 
@@ -24,7 +24,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import re  # noqa: E402
-import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -32,12 +31,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "test")]
 from bench import datasets  # noqa: E402
 from bench.bench_lpa import INVERSE_DYNAMICS  # noqa: E402
 from lpa_transfer import load_model  # noqa: E402
-from lpa_transfer.model_store import file_name  # noqa: E402
-from ros_harness import NodeProcess, call_service, ros_params, unique_domain_id  # noqa: E402
+from lpa_transfer.transfer.model_store import file_name  # noqa: E402
+from lpa_transfer_nodes.testing import NodeProcess, call_service, ros_params, unique_domain_id  # noqa: E402
 
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402

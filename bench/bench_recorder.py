@@ -5,11 +5,10 @@ For each rate, a fresh recorder process (its own ROS domain) records /joint_stat
 with SIGINT and the bag's count is compared with what was sent. Publishing is reliable with
 depth 1000 on both sides, so loss means the recorder could not keep up within that queue.
 
-    python bench/bench_recorder.py --rates 500 1000 2000 4000 --seconds 5
+    python -m bench.bench_recorder --rates 500 1000 2000 4000 --seconds 5
 """
 import argparse
 import signal
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -19,10 +18,9 @@ from rclpy.duration import Duration
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 
-from lpa_transfer import bag
+from lpa_transfer.recording import bag
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "test"))
-from ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until  # noqa: E402
+from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id, wait_until  # noqa: E402
 
 
 def publish_at_rate(publisher, rate_hz, seconds):

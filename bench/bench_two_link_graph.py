@@ -7,7 +7,7 @@ correspondence collection (two lock-stepped robot_sim nodes driven over DDS), th
 (one robot babbling, transfers through the service) and the whole run including the nodes'
 start-up and shutdown.
 
-Usage: python bench/bench_two_link_graph.py [--config scenarios/two_link_graph/config.yaml]
+Usage: python -m bench.bench_two_link_graph [--config scenarios/two_link_graph/config.yaml]
 """
 import argparse
 import json
@@ -22,8 +22,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "test"))
-from ros_harness import unique_domain_id  # noqa: E402
+from lpa_transfer_nodes.testing import unique_domain_id  # noqa: E402
 
 
 def main():

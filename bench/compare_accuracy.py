@@ -5,15 +5,12 @@ same 10,000 test correspondences of the §3.6 pair (end-effector RMSE, mm). A si
 a lot with the partition, so "equal accuracy" is judged on the mean paired difference and its
 standard error.
 
-Usage: python bench/compare_accuracy.py [--sizes 200 1000] [--runs 20]
+Usage: python -m bench.compare_accuracy [--sizes 200 1000] [--runs 20]
 """
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench import datasets  # noqa: E402
 from bench.bench_lpa import MODELS, TWO_LINK, rmse  # noqa: E402
 

@@ -21,8 +21,8 @@ and a light, short 4-link target (see ``SOURCE_CHAIN`` and ``TARGET_CHAIN``).
 """
 import numpy as np
 
-from lpa_transfer.kinematics import domain_data, sample_joint_uniform
-from lpa_transfer.planar_chain import inverse_dynamics_babbling
+from lpa_transfer.robots.kinematics import domain_data, sample_joint_uniform
+from lpa_transfer.robots.planar_chain import inverse_dynamics_babbling
 
 TWO_LINK_SOURCE, TWO_LINK_TARGET = (0.3, 0.25), (0.6, 0.2)               # m, Table 3.1
 TWO_LINK_JOINT_LIMITS = [(0.0, np.pi / 2), (0.0, np.pi)]

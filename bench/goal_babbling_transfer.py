@@ -4,7 +4,7 @@ exploration for T_guided s and transfer of the source's experience with PA or LP
 1 (as the thesis) or through the negative-transfer guard (GuardedModel, §6.6). Prints, per
 condition and T_guided, the reaching rate and mean error (mean over seeds) every 60 s.
 
-    nice -n 15 python bench/goal_babbling_transfer.py --seeds 2 --guided 60 240
+    nice -n 15 python -m bench.goal_babbling_transfer --seeds 2 --guided 60 240
 
 Not run in CI: one 1000 s run takes ~5-20 s on one core, and the full grid (10 seeds, four
 T_guided, five conditions) ~1.5 h.
@@ -13,16 +13,13 @@ import argparse
 import os
 import sys
 import time
-from pathlib import Path
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
-from lpa_transfer.goal_babbling_experiment import (CONDITIONS, Experiment1,  # noqa: E402
-                                                    run_condition)
+from lpa_transfer.goal_babbling.experiment import CONDITIONS, Experiment1, run_condition  # noqa: E402
 
 
 def mean_curves(condition, seeds, config):

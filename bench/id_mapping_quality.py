@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How well do PA and LPA map held-out inverse-dynamics correspondences (thesis §5.4)?
 
-Usage: ``python bench/id_mapping_quality.py RUN_DIR [SEED]`` on a chapter 5 run directory
+Usage: ``python -m bench.id_mapping_quality RUN_DIR [SEED]`` on a chapter 5 run directory
 (``scenarios/inverse_dynamics/run.sh``): the pairs ``pairs_<SEED>_*.npz`` (default seed 0)
 are split into 6 blocks of consecutive pairs (whole babbling lines), each held out once; the
 models are fitted on the rest with the experiment's settings (latent_dim 16, LPA clustered
@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.correspondences import load_correspondences
-from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.exploration.correspondences import load_correspondences
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 N_FOLDS = 6
 N_MINS = (40, 80, 160, 320)

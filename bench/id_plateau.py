@@ -2,7 +2,7 @@
 """Why do initialised youBot learners level off above learning from scratch? (thesis §5.5.3;
 issue 4)
 
-Usage: ``python bench/id_plateau.py [--seed S] [--trials N] [--target youbot] [--stars ...]
+Usage: ``python -m bench.id_plateau [--seed S] [--trials N] [--target youbot] [--stars ...]
 [--variants default norm_out=1 ...]``, from the repository root.
 
 In process, with the library only (no ROS), the scenario of
@@ -44,16 +44,15 @@ Deterministic: the same seed prints the same numbers.
 """
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 import yaml
 from sklearn.neighbors import NearestNeighbors
 
-from lpa_transfer.control import PID
-from lpa_transfer.online_learning import FeedForwardLearner, make_regressor
-from lpa_transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.robots.control import PID
+from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner, make_regressor
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 from id_transfer_headroom import CONFIG, StarRobot, babble
 
@@ -169,10 +168,8 @@ def main(argv=None):
 def print_reference_table(args, experiment, scratch_runs):
     """The reference's convergence table for the target, learning from scratch replaced by
     ``scratch_runs`` (star -> curves; module docstring)."""
-    scenario = Path(__file__).resolve().parent.parent / "scenarios" / "inverse_dynamics"
-    sys.path.insert(0, str(scenario))
-    from merge_results import read_run
-    from run_experiment import convergence_table
+    from lpa_transfer.inverse_dynamics.analysis import convergence_table
+    from lpa_transfer.inverse_dynamics.report import read_run
     cells = read_run(args.reference)[1]
     curves = {key: list(by_seed.values()) for key, by_seed in cells.items()
               if key.startswith(f"{args.target}/") and key.split("/")[1] in scratch_runs}

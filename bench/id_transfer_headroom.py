@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How much of the chapter 5 transfer is lost in the mapping? (thesis §5.4, §5.5.3; issue 4)
 
-Usage: ``python bench/id_transfer_headroom.py [--seed S] [--trials N] [--targets pincher youbot]
+Usage: ``python -m bench.id_transfer_headroom [--seed S] [--trials N] [--targets pincher youbot]
 [--stars star1 star2]``, from the repository root.
 
 In process, with the library only (no ROS), from ``scenarios/inverse_dynamics/config.yaml``:
@@ -30,15 +30,17 @@ import numpy as np
 import yaml
 from sklearn.neighbors import NearestNeighbors
 
-from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
-from lpa_transfer.control import PID, start_servo
-from lpa_transfer.correspondences import collect_correspondences
-from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
-from lpa_transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.tasks import star_task
+from lpa_transfer.exploration.babbling import BabblingProgram, box_around
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.control import PID, start_servo
+from lpa_transfer.exploration.correspondences import collect_correspondences
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
+                                                           make_regressor)
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.inverse_dynamics.tasks import star_task
 
 from id_mapping_quality import held_out_predictions   # the same held-out blocks
 

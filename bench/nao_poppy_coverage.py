@@ -2,7 +2,7 @@
 in process on the analytic arms): ceilings on the reaching rate that data confined to some
 poses can give, next to what transfer reaches right after guided exploration.
 
-    nice -n 10 python bench/nao_poppy_coverage.py --seeds 0 1 2
+    nice -n 10 python -m bench.nao_poppy_coverage --seeds 0 1 2
 
 The setting is nao_poppy.yaml's, built by bench/nao_poppy_rates.py (4 movements a simulated
 second). Printed, as shares of the test points within the reaching threshold (0.015 m):
@@ -20,12 +20,13 @@ second). Printed, as shares of the test points within the reaching threshold (0.
 import argparse
 import dataclasses
 
-from nao_poppy_rates import model_after_guided, prepare  # also puts the project on sys.path
+from bench.nao_poppy_rates import model_after_guided, prepare
 
 import numpy as np  # noqa: E402
 
-from lpa_transfer.guided_exploration import hold_at_home, shared_limits  # noqa: E402
-from lpa_transfer.reaching import coverage, evaluate_reaching, reachable_share  # noqa: E402
+from lpa_transfer.robots.kinematics import hold_at_home  # noqa: E402
+from lpa_transfer.exploration.guided import shared_limits  # noqa: E402
+from lpa_transfer.goal_babbling.reaching import coverage, evaluate_reaching, reachable_share  # noqa: E402
 
 N_JOINT_SAMPLES = 400000
 

@@ -4,7 +4,7 @@ from scratch and the benefit of transfer. scenarios/goal_babbling/nao_poppy.yaml
 rate (4 a second) from the scratch rows of this table: the rate at which our scratch
 learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
 
-    nice -n 10 python bench/nao_poppy_rates.py --rates 2 3 4 10 --seeds 0 1
+    nice -n 10 python -m bench.nao_poppy_rates --rates 2 3 4 10 --seeds 0 1
 
 The robots, homes, boxes, test points (200 000 joint samples), threshold, guided
 exploration's target_range, LPA and guard are those of nao_poppy.yaml; Nao babbles with its
@@ -16,28 +16,27 @@ alone (no transfer), LPA transfer, and LPA transfer behind the guard.
 """
 import argparse
 import os
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-from lpa_transfer.babbling import robot_kinematics  # noqa: E402
-from lpa_transfer.goal_babbling import GoalBabbling  # noqa: E402
-from lpa_transfer.guided_exploration import guided_exploration, hold_at_home  # noqa: E402
-from lpa_transfer.local_procrustes import LocalProcrustesAnalysis  # noqa: E402
-from lpa_transfer.negative_transfer import GuardedModel, chain_lipschitz  # noqa: E402
-from lpa_transfer.reaching import evaluate_reaching, evaluation_points  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
-from lpa_transfer.sensorimotor import make_sensorimotor_model  # noqa: E402
-from lpa_transfer.transfer_babbling import (initialise_with_transfer, padded_rows,  # noqa: E402
-                                            transfer_experience)
+from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling  # noqa: E402
+from lpa_transfer.exploration.guided import guided_exploration  # noqa: E402
+from lpa_transfer.robots.kinematics import hold_at_home  # noqa: E402
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis  # noqa: E402
+from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz  # noqa: E402
+from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.learners.sensorimotor import make_sensorimotor_model  # noqa: E402
+from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padded_rows,  # noqa: E402
+                                                 transfer_experience)
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml").read_text())
 CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded")

@@ -3,7 +3,7 @@
 
 Thesis §5.5.2: torque control at 100 Hz with PID gains Pincher K_p 5, K_d 0.1, K_i 0.01 and
 youBot K_p 100, K_d 2.0, K_i 0.01, effort limits 2.5 / 100 N·m (§5.5.1). This runs one trial
-of a 'star' (7 lines, 0.6 s out and 0.6 s back, ``lpa_transfer.tasks``) with the feedback
+of a 'star' (7 lines, 0.6 s out and 0.6 s back, ``lpa_transfer.inverse_dynamics.tasks``) with the feedback
 alone (no learned feed-forward: the first trial of learning), the torque held for the whole
 control period over 1 ms physics steps, at 100 Hz (thesis) and 1 kHz control, for each robot
 file as it is and with its joint drives (armature, damping) set to zero, and prints:
@@ -13,29 +13,27 @@ file as it is and with its joint drives (armature, damping) set to zero, and pri
 * sat %: share of control periods in which some joint is at its effort limit;
 * flips: control periods whose torque jumps from one limit to the opposite one (chatter).
 
-Usage: python bench/pid_stability.py [--robots youbot_arm pincher_arm] [--rates 100 1000]
+Usage: python -m bench.pid_stability [--robots youbot_arm pincher_arm] [--rates 100 1000]
                                      [--drives file none armature]
 (``armature``: the file's armature without its damping). About a minute for everything;
 most of it is inverse kinematics of the desired paths.
 """
 import argparse
 import dataclasses
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
-from lpa_transfer.babbling import robot_kinematics  # noqa: E402
-from lpa_transfer.control import PID  # noqa: E402
-from lpa_transfer.lwpr import LWPR  # noqa: E402
-from lpa_transfer.online_learning import FeedForwardLearner  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
-from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
-from lpa_transfer.tasks import star_task  # noqa: E402
+from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
+from lpa_transfer.robots.control import PID  # noqa: E402
+from lpa_transfer.learners.lwpr import LWPR  # noqa: E402
+from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf  # noqa: E402
+from lpa_transfer.inverse_dynamics.tasks import star_task  # noqa: E402
 
 PHYSICS_STEP = 1e-3
 #: robot file stem: (PID kp, ki, kd of §5.5.2, star centre pose q_c, star radius m): Star 1
@@ -66,7 +64,7 @@ def desired(robot, q_centre, radius, dt):
 
 
 def pid_trial(robot, gains, trajectory, dt):
-    """One PID-only trial; returns the Trial (lpa_transfer.online_learning)."""
+    """One PID-only trial; returns the Trial (lpa_transfer.inverse_dynamics.online_learning)."""
     x_d, q, qd, qdd = trajectory
     with RobotSimulator(robot_urdf(robot), control_mode="torque", physics_step=PHYSICS_STEP,
                         initial_positions=q[0]) as sim:

@@ -1,13 +1,16 @@
 """lpa_transfer: transfer learning between differently built robots with (Local) Procrustes
-Analysis — the pure library (no rclpy).
+Analysis — the pure library (it never imports rclpy; the ROS 2 nodes are ``lpa_transfer_nodes``).
 
-Thesis: Makondo, "Accelerating robot learning of motor skills with knowledge transfer"
-(../shared/seeds). Models follow scikit-learn conventions: constructor arguments are
-hyperparameters, ``fit(source, target)`` learns from correspondences, learned attributes end
-in ``_``, and ``transfer(source)`` maps new source points into the target domain.
+Thesis: Makondo, "Accelerating robot learning of motor skills with knowledge transfer".
+Models follow scikit-learn conventions: constructor arguments are hyperparameters,
+``fit(source, target)`` learns from correspondences, learned attributes end in ``_``, and
+``transfer(source)`` maps new source points into the target domain.
+
+Subpackages by role: ``transfer`` (PA, LPA, model files), ``robots``, ``learners``,
+``exploration``, ``evaluation``, ``recording``, and one per thesis chapter: ``lfd`` (ch. 4),
+``inverse_dynamics`` (ch. 5), ``goal_babbling`` (ch. 6).
 """
-from .local_procrustes import LocalProcrustesAnalysis
-from .model_io import load_model
-from .procrustes import ProcrustesAnalysis
+from lpa_transfer.learners.lwpr import LWPR
+from lpa_transfer.transfer import LocalProcrustesAnalysis, ProcrustesAnalysis, load_model
 
-__all__ = ["ProcrustesAnalysis", "LocalProcrustesAnalysis", "load_model"]
+__all__ = ["ProcrustesAnalysis", "LocalProcrustesAnalysis", "load_model", "LWPR"]

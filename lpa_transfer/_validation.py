@@ -92,3 +92,19 @@ def check_box(low, high, problem):
             or not (np.isfinite(low).all() and np.isfinite(high).all()) or (low > high).any():
         raise ValueError(f"{problem}, got {low.tolist()} and {high.tolist()}")
     return low, high
+
+
+def check_x_bounds(x_bounds, n_task=None):
+    """``x_bounds`` = (low, high) as two float arrays; ValueError unless finite, of one length
+    (``n_task`` if given) and low <= high."""
+    try:
+        low, high = (np.asarray(bound, dtype=np.float64) for bound in x_bounds)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"x_bounds must be a pair (low, high) of coordinate lists: {exc}") \
+            from None
+    check_box(low, high, "x_bounds must be finite (low, high) of one length with "
+                               "low <= high")
+    if n_task is not None and low.size != n_task:
+        raise ValueError(f"x_bounds have {low.size} coordinates but the robot's task space has "
+                         f"{n_task}")
+    return low, high

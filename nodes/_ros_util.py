@@ -18,9 +18,8 @@ from rclpy.signals import SignalHandlerOptions
 
 from builtin_interfaces.msg import Time
 
-from lpa_transfer.bag import split_type_name
-from lpa_transfer.model_store import matrix_from_rows
-from lpa_transfer.simulator import SimState
+from lpa_transfer.recording.bag import split_type_name
+from lpa_transfer.robots.simulator import SimState
 from lpa_transfer_interfaces.msg import Matrix
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 
@@ -101,7 +100,7 @@ def init_with_stop_event(args=None):
 
 
 def qos_to_dict(qos):
-    """A QoS profile as the lower-case dict ``lpa_transfer.bag.qos_profiles_yaml`` writes."""
+    """A QoS profile as the lower-case dict ``lpa_transfer.recording.bag.qos_profiles_yaml`` writes."""
     return {"history": qos.history.name.lower(), "depth": qos.depth,
             "reliability": qos.reliability.name.lower(),
             "durability": qos.durability.name.lower(), "liveliness": qos.liveliness.name.lower()}
@@ -315,3 +314,13 @@ class ServiceCalls:
         if not answer.success:
             raise RuntimeError(f"{name} failed: {answer.message}")
         return answer
+
+
+def matrix_from_rows(rows, cols, data, name):
+    """A (rows, cols) float64 view of row-major ``data``; ValueError if the sizes disagree."""
+    if rows * cols != len(data):
+        raise ValueError(f"{name}: rows*cols = {rows}*{cols} = {rows * cols} does not match "
+                         f"the {len(data)} values in data")
+    if isinstance(data, array.array) and data.typecode == "d":
+        return np.frombuffer(data, dtype=np.float64).reshape(rows, cols)   # no copy
+    return np.asarray(data, dtype=np.float64).reshape(rows, cols)

@@ -4,7 +4,7 @@ Run (with two robot_sim nodes in lock-step mode under the namespaces ``/source``
 ``/target``, and lpa_mapping): ``correspondence_collector --ros-args -p
 source_robot:=scenarios/robots/two_link_source.toml -p target_robot:=... -p output:=pairs.npz``.
 
-What it does (:func:`lpa_transfer.correspondences.collect_correspondences`): drives both
+What it does (:func:`lpa_transfer.exploration.correspondences.collect_correspondences`): drives both
 robots through one seeded babbling program over their ``StepRobot`` services, pairs their
 samples by ``pairing_rule``, publishes every pair as it is made, saves the set, asks the
 mapping service to fit a model on it, and exits (0 on success). SIGINT/SIGTERM stop the
@@ -13,7 +13,7 @@ file) and no model is fitted. Because the robots are stepped in lock-step, a run
 long as the computation, and the same parameters give the same pairs, bit for bit.
 
 Guided exploration (``program:=goal_babbling``, thesis §6.4.2, Alg. 7,
-:func:`lpa_transfer.correspondences.collect_guided_correspondences`): the target goal-babbles
+:func:`lpa_transfer.exploration.correspondences.collect_guided_correspondences`): the target goal-babbles
 (Alg. 6) for ``guided_seconds`` on the joints it shares with the source, its other joints at
 ``target_home``; then the source executes the same commands, its other joints at
 ``source_home``. Pair i is each robot's observed (q̄, x) for command i: the positions its
@@ -37,7 +37,7 @@ Parameters:
 * ``program``: ``joint_lines`` (default), ``task_lines`` or ``goal_babbling`` (guided
   exploration, above); ``n_segments`` (20), ``samples_per_segment`` (5), ``time_law``
   (``linear``, default, or ``minimum_jerk``: how the samples are spaced along each line,
-  :mod:`lpa_transfer.babbling`), ``steps_per_sample``
+  :mod:`lpa_transfer.exploration.babbling`), ``steps_per_sample``
   (physics steps between samples, 400), ``seed`` (0), ``task_low``/``task_high``
   (task_lines' waypoint box, m), ``task_offset`` (same_task_point: the target's task frame
   relative to the source's, m);
@@ -50,23 +50,23 @@ Parameters:
   shared joints, ``source_joints[i]`` is ``target_joints[i]``; default the first
   min(n_s, n_t) joints of each), ``target_range`` (``shared``, default: the target explores
   within both robots' ranges of the shared joints; ``own``: within its own, and only the
-  commands the source could follow are pairs, see :mod:`lpa_transfer.guided_exploration`;
+  commands the source could follow are pairs, see :mod:`lpa_transfer.exploration.guided`;
   the file then also holds the target's rows of every command, ``meta_target_experience``,
   and ``meta_followed``), ``n_subtargets`` (T, 10), ``sigma`` (0.1) and ``drift``
   (0.01) of the exploration noise, ``p_home`` (0.1, returns home), ``steps_per_second``
-  (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.GoalBabbling`;
+  (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`;
   ``seed`` seeds it and ``steps_per_sample`` is the physics steps of one movement step (e.g.
   100 with robot_sim's 1 ms step for 10 steps a second). ``*_task_*``, ``task_offset``,
   ``features``, ``n_segments``/``samples_per_segment`` and ``time_law`` do not apply.
 * ``source_task_halfwidth``, ``target_task_halfwidth`` (m, one value per task coordinate):
   instead of ``*_task_low``/``*_task_high``, babble in the box of this half-width around the
   end effector at ``*_home`` — "in the vicinity" of a task centred there (§5.5.3,
-  :func:`lpa_transfer.babbling.box_around`).
+  :func:`lpa_transfer.exploration.babbling.box_around`).
 * ``source_pid``, ``target_pid`` (double arrays ``[kp, ki, kd]``, default empty): set for a
   robot_sim in torque mode; the robot then tracks the babbling commands with this PID
-  (:class:`lpa_transfer.control.PIDServo`), as §5.4.1 collects inverse-dynamics data.
+  (:class:`lpa_transfer.robots.control.PIDServo`), as §5.4.1 collects inverse-dynamics data.
 * ``features`` (string array, default ``[position, ee_x, ee_y]``): the columns of a sample,
-  see :mod:`lpa_transfer.correspondences`.
+  see :mod:`lpa_transfer.exploration.correspondences`.
 * ``output``: the ``.npz`` to save the set to (``source``, ``target`` arrays and metadata;
   the file lpa_mapping's ``correspondence_file`` reads); empty = do not save.
 * ``model_id``: fit a model under this id when done (empty = do not fit); ``method``
@@ -94,15 +94,17 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from lpa_transfer.babbling import BabblingProgram, box_around, robot_kinematics
-from lpa_transfer.control import PID, start_servo
-from lpa_transfer.correspondences import (DEFAULT_FEATURES, check_features,
-                                          check_guided_exploration, check_pairing_rule,
-                                          collect_correspondences,
-                                          collect_guided_correspondences)
-from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
-from lpa_transfer.robot_environment import stepped_environment
-from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.exploration.babbling import BabblingProgram, box_around
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.control import PID, start_servo
+from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, check_features,
+                                                      check_guided_exploration, check_pairing_rule,
+                                                      collect_correspondences,
+                                                      collect_guided_correspondences)
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
+from lpa_transfer._validation import check_x_bounds
+from lpa_transfer.robots.environment import stepped_environment
+from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,

@@ -3,7 +3,7 @@
 Run: ``demonstration_source --ros-args --params-file scenarios/lfd/config.yaml`` (or
 ``python -m lpa_transfer_nodes.demonstration_source ...``).
 
-The node makes the demonstrations once at start (:func:`lpa_transfer.lfd_experiment.
+The node makes the demonstrations once at start (:func:`lpa_transfer.lfd.experiment.
 demonstrations`: LASA shapes placed in a box of the demonstrator's task space and traced with
 its IK) and publishes each on ``demonstrations`` (lpa_transfer_interfaces/msg/Demonstration),
 reliable and transient local with a queue of all of them, so a subscriber that joins later
@@ -22,7 +22,7 @@ import time
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-from lpa_transfer.lfd_experiment import demonstrations, load_setup
+from lpa_transfer.lfd.experiment import demonstrations, load_setup
 from lpa_transfer_interfaces.msg import Demonstration
 from lpa_transfer_nodes._ros_util import serve, to_matrix
 
@@ -34,7 +34,7 @@ def demonstration_qos(count):
 
 
 def demonstration_msg(body, demo, index, n_demos, stamp):
-    """A :class:`lpa_transfer.lfd_experiment.Demonstration` as a message."""
+    """A :class:`lpa_transfer.lfd.experiment.Demonstration` as a message."""
     msg = Demonstration(body=body, shape=demo.shape, index=index, n_demos=n_demos,
                         times=[float(t) for t in demo.times], joints=to_matrix(demo.q),
                         points=to_matrix(demo.x))

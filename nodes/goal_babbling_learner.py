@@ -5,16 +5,16 @@ Run (next to a robot_sim in position mode, lock-step, in the same namespace):
 -p robot:=scenarios/robots/goal_babbling_target.toml -p home:=[-0.785398,1.65]
 -p x_low:=[0.1,-1.1] -p x_high:=[1.1,0.4]``.
 
-The node is the rclpy adapter of one learner of :func:`lpa_transfer.goal_babbling_experiment.
-run_condition`: online goal babbling (Alg. 6, :class:`lpa_transfer.goal_babbling.GoalBabbling`)
-on the robot through its StepRobot service (:func:`lpa_transfer.robot_environment.
+The node is the rclpy adapter of one learner of :func:`lpa_transfer.goal_babbling.experiment.
+run_condition`: online goal babbling (Alg. 6, :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`)
+on the robot through its StepRobot service (:func:`lpa_transfer.robots.environment.
 stepped_environment`: every command runs ``steps_per_sample`` physics steps in position mode,
 and the model learns the OBSERVED joint positions and end effector), into a K-nearest-neighbour
-inverse model L⁻¹ (:mod:`lpa_transfer.sensorimotor`, K = 3 in §6.5). The model can be
+inverse model L⁻¹ (:mod:`lpa_transfer.learners.sensorimotor`, K = 3 in §6.5). The model can be
 initialised offline (§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration)
 and with experience transferred from another robot, optionally behind the guard against
-negative transfer (:class:`lpa_transfer.negative_transfer.GuardedModel`, §6.6). Progress is
-measured as in §6.5 (:mod:`lpa_transfer.reaching`): the mean reaching error and the reaching
+negative transfer (:class:`lpa_transfer.goal_babbling.negative_transfer.GuardedModel`, §6.6). Progress is
+measured as in §6.5 (:mod:`lpa_transfer.goal_babbling.reaching`): the mean reaching error and the reaching
 rate of L⁻¹ on test points evenly spread through the reachable part of a task box, executed on
 the robot's ANALYTIC forward kinematics (evaluating never moves the simulated robot, so it
 does not disturb babbling).
@@ -28,9 +28,9 @@ Parameters:
 * ``robot`` (required): the robot parameter file (joint limits and analytic kinematics;
   planar chains learn (x, y), serial chains world (x, y, z)).
 * ``home`` (double array, default zero clipped into the joint limits): q_home, where babbling
-  starts and returns to (:class:`~lpa_transfer.goal_babbling.GoalBabbling`).
+  starts and returns to (:class:`~lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`).
 * ``active_joints`` (integer array, default all): babble with these joints only, the others
-  held at home (:func:`lpa_transfer.guided_exploration.hold_at_home`); rows stay (q, x) of
+  held at home (:func:`lpa_transfer.robots.kinematics.hold_at_home`); rows stay (q, x) of
   all joints, and the test points are those the active joints reach. A source robot
   explores like this when only its joints shared with the target are transferred (§6.5.2).
 * ``x_low``, ``x_high`` (double arrays, required): X_bounds, the task box goals are drawn
@@ -47,11 +47,11 @@ Parameters:
   thesis does); ``guard_params`` (JSON object string, ``'{}'``): GuardedModel's
   hyperparameters (``transferred_weight``, ``coverage_radius``, ``coverage_count``,
   ``disagreement_threshold``, ``lipschitz``, ``n_checked``). ``lipschitz`` defaults to
-  :func:`~lpa_transfer.negative_transfer.chain_lipschitz` of the robot's links (planar or
+  :func:`~lpa_transfer.goal_babbling.negative_transfer.chain_lipschitz` of the robot's links (planar or
   serial).
 * ``eval_low``, ``eval_high`` (double arrays, default X_bounds): the box of the test points;
   ``eval_spacing`` (m, 0.05): their grid spacing; ``eval_joint_samples`` (20000): the joint
-  samples that find the reachable grid points (:func:`lpa_transfer.reaching.
+  samples that find the reachable grid points (:func:`lpa_transfer.goal_babbling.reaching.
   evaluation_points`; a 3-D box needs more than a planar one to find its thin parts;
   computed once at start-up, the node does not start without any);
   ``reaching_threshold`` (m, 0.01, §6.5.1).
@@ -93,14 +93,15 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from lpa_transfer.babbling import robot_kinematics
-from lpa_transfer.goal_babbling import GoalBabbling, check_x_bounds
-from lpa_transfer.guided_exploration import hold_at_home
-from lpa_transfer.negative_transfer import GuardedModel, chain_lipschitz
-from lpa_transfer.reaching import evaluate_reaching, evaluation_points
-from lpa_transfer.robot_environment import stepped_environment, task_dims
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.sensorimotor import make_sensorimotor_model
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
+from lpa_transfer._validation import check_x_bounds
+from lpa_transfer.robots.kinematics import hold_at_home
+from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz
+from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points
+from lpa_transfer.robots.environment import stepped_environment, task_dims
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
 from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
 from lpa_transfer_nodes._ros_util import (RobotClients, ServiceTimeout, answering,

@@ -4,10 +4,10 @@ Run (next to a robot_sim in torque mode, lock-step, in the same namespace):
 ``inverse_dynamics_learner --ros-args -r __ns:=/pincher -p robot:=scenarios/robots/pincher_arm.toml
 -p centre_pose:=[0.0,0.6,0.9,0.6] -p star_radius:=0.05 -p pid:=[5.0,0.01,0.1]``.
 
-The node runs the control loop of Fig. 5-1 (:class:`lpa_transfer.online_learning.FeedForwardLearner`)
+The node runs the control loop of Fig. 5-1 (:class:`lpa_transfer.inverse_dynamics.online_learning.FeedForwardLearner`)
 on its robot through the robot's StepRobot service: at every control period the learned
 feed-forward torque τ_ff(q_d, q̇_d, q̈_d) plus PID feedback, then one online update from the
-observed (q, q̇, q̈, τ). The task is a 'star' (§5.5.1, :mod:`lpa_transfer.tasks`) around the
+observed (q, q̇, q̈, τ). The task is a 'star' (§5.5.1, :mod:`lpa_transfer.inverse_dynamics.tasks`) around the
 end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
 
 Parameters:
@@ -26,7 +26,7 @@ Parameters:
 * ``regressor`` (``lwpr``) and ``regressor_params`` (JSON object of its hyperparameters,
   e.g. ``{"init_D": 30, "init_alpha": 1.1}``): the online learner is a parameter. LWPR's
   ``norm_in`` defaults to the spread of the task's desired states
-  (:func:`lpa_transfer.online_learning.input_scale`).
+  (:func:`lpa_transfer.inverse_dynamics.online_learning.input_scale`).
 * ``call_timeout`` (s, 30) for each robot step; ``wait_timeout`` (s, 30) for the robot.
 
 Services: ``~/initialise`` (InitialiseLearner: learn offline from (q, q̇, q̈, τ) samples,
@@ -41,12 +41,13 @@ import numpy as np
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from lpa_transfer.babbling import robot_kinematics
-from lpa_transfer.control import PID
-from lpa_transfer.kinematics import home_pose
-from lpa_transfer.online_learning import FeedForwardLearner, input_scale, make_regressor
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.tasks import star_task
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.control import PID
+from lpa_transfer.robots.kinematics import home_pose
+from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
+                                                           make_regressor)
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.inverse_dynamics.tasks import star_task
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
 from lpa_transfer_nodes._ros_util import (RobotClients, answering, array_parameter,

@@ -3,7 +3,7 @@
 Run: ``lpa_mapping --ros-args -p model_dir:=/path`` (or ``python -m lpa_transfer_nodes.lpa_mapping``).
 
 Parameter ``model_dir`` (default ``~/.lpa_transfer/models``): where models are persisted, one
-``.npz`` per model id (:mod:`lpa_transfer.model_store`); all are reloaded on start, so a
+``.npz`` per model id (:mod:`lpa_transfer.transfer.model_store`); all are reloaded on start, so a
 restarted service answers as before.
 
 Services, under the node's name (``/lpa_mapping/...`` by default), types in
@@ -39,8 +39,8 @@ from rclpy.node import Node
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, from_matrix, serve,
                                           to_matrix)
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.correspondences import load_correspondences
-from lpa_transfer.model_store import ModelStore, training_rmse
+from lpa_transfer.exploration.correspondences import load_correspondences
+from lpa_transfer.transfer.model_store import ModelStore, training_rmse
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
@@ -67,7 +67,7 @@ def fit_hyperparameters(request):
 
 
 class MappingService(Node):
-    """Thin ROS adapter over :class:`~lpa_transfer.model_store.ModelStore`."""
+    """Thin ROS adapter over :class:`~lpa_transfer.transfer.model_store.ModelStore`."""
 
     def __init__(self):
         super().__init__("lpa_mapping")

@@ -17,7 +17,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 import yaml
 
-from lpa_transfer.bag import read_messages, summary
+from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
                                           array_parameter)
 

@@ -15,7 +15,7 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer.bag import BagWriter, header_stamp_ns
+from lpa_transfer.recording.bag import BagWriter, header_stamp_ns
 from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
                                           qos_to_dict, array_parameter)
 

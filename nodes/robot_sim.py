@@ -1,4 +1,4 @@
-"""robot_sim: a simulated robot (pybullet, :mod:`lpa_transfer.simulator`) on ROS 2.
+"""robot_sim: a simulated robot (pybullet, :mod:`lpa_transfer.robots.simulator`) on ROS 2.
 
 Run: ``robot_sim --ros-args -p robot:=scenarios/robots/two_link_source.toml`` (or
 ``python -m lpa_transfer_nodes.robot_sim ...``).
@@ -6,14 +6,14 @@ Run: ``robot_sim --ros-args -p robot:=scenarios/robots/two_link_source.toml`` (o
 Parameters:
 
 * ``robot``: a robot parameter file (``scenarios/robots/*.toml``); the URDF is generated from
-  it (:func:`lpa_transfer.simulator.robot_urdf`). Or ``urdf``: a URDF file. Exactly one.
+  it (:func:`lpa_transfer.robots.simulator.robot_urdf`). Or ``urdf``: a URDF file. Exactly one.
 * ``control_mode``: ``"position"`` (default; commands are joint targets) or ``"torque"``.
 * ``physics_step`` (s, default 0.001): the pybullet time step.
 * ``control_rate`` (Hz, default 100): free-running mode only, see below.
 * ``initial_positions`` (double array, default: zero clipped into the joint limits).
 * ``seed`` (int, default 0): passed to the simulator (which is deterministic).
 * ``position_gain`` (default 0.05): the position motors' gain, see
-  :class:`lpa_transfer.simulator.RobotSimulator` (pybullet's own default 0.1 can chatter).
+  :class:`lpa_transfer.robots.simulator.RobotSimulator` (pybullet's own default 0.1 can chatter).
 * ``lockstep`` (bool, default true).
 
 Lock-step mode (default): the service ``~/step`` (lpa_transfer_interfaces/srv/StepRobot)
@@ -46,8 +46,8 @@ from geometry_msgs.msg import Point, PointStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import answering, array_parameter, serve, sim_stamp
 

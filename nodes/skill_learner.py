@@ -4,7 +4,7 @@ Run (next to a robot_sim in position mode, lock-step, in the same namespace):
 ``skill_learner --ros-args -r __ns:=/meka -p robot:=scenarios/robots/meka_right_arm.toml``
 (or ``python -m lpa_transfer_nodes.skill_learner ...``).
 
-Each LearnSkill call fits one :class:`lpa_transfer.dmp.JointDMP` (eq. 4.1-4.5) on a shape's
+Each LearnSkill call fits one :class:`lpa_transfer.lfd.dmp.JointDMP` (eq. 4.1-4.5) on a shape's
 demonstrations in this robot's joint space (transferred by LPA, or traced by its own IK),
 reproduces the first demonstration with it (§4.5.2: "reproduce the first demonstration") and
 executes that reproduction on the robot's simulator: a reset to its first pose, then each
@@ -37,11 +37,11 @@ import os
 import numpy as np
 from rclpy.node import Node
 
-from lpa_transfer.dmp import JointDMP
-from lpa_transfer.guided_exploration import pad_transferred
-from lpa_transfer.kinematics import home_pose
-from lpa_transfer.lfd_correspondences import arm_kinematics
-from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.lfd.dmp import JointDMP
+from lpa_transfer.robots.kinematics import pad_transferred
+from lpa_transfer.robots.kinematics import home_pose
+from lpa_transfer.robots.kinematics import arm_kinematics
+from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
 from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, from_matrix,

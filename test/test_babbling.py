@@ -1,13 +1,13 @@
-"""lpa_transfer.babbling: seeded straight-line babbling in joint or task space."""
+"""lpa_transfer.exploration.babbling: seeded straight-line babbling in joint or task space."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import (BabblingProgram, Kinematics, box_around, planar_kinematics,
-                                   polyline, robot_kinematics)
-from lpa_transfer.inverse_kinematics import solve_path
-from lpa_transfer.kinematics import home_pose, planar_forward_kinematics
+from lpa_transfer.exploration.babbling import BabblingProgram, box_around, polyline
+from lpa_transfer.robots.kinematics import Kinematics, planar_kinematics, robot_kinematics
+from lpa_transfer.robots.inverse_kinematics import solve_path
+from lpa_transfer.robots.kinematics import home_pose, planar_forward_kinematics
 from two_link import elbow_ik, robot
 
 TWO_LINK = ("two_link_source", "two_link_target")

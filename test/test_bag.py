@@ -1,9 +1,9 @@
-"""lpa_transfer.bag: rosbag2-layout MCAP files, cross-checked with the independent mcap_ros2 decoder."""
+"""lpa_transfer.recording.bag: rosbag2-layout MCAP files, cross-checked with the independent mcap_ros2 decoder."""
 from collections import namedtuple
 
 import pytest
 
-from lpa_transfer import bag
+from lpa_transfer.recording import bag
 
 rclpy_serialization = pytest.importorskip("rclpy.serialization")
 from sensor_msgs.msg import JointState  # noqa: E402  (after the skip: needs the ROS wheels)

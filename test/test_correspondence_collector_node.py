@@ -13,13 +13,14 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer.babbling import BabblingProgram, planar_kinematics
-from lpa_transfer.control import PID, start_servo
-from lpa_transfer.correspondences import collect_correspondences
-from lpa_transfer.model_store import ModelStore
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from ros_harness import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
+from lpa_transfer.exploration.babbling import BabblingProgram
+from lpa_transfer.robots.kinematics import planar_kinematics
+from lpa_transfer.robots.control import PID, start_servo
+from lpa_transfer.exploration.correspondences import collect_correspondences
+from lpa_transfer.transfer.model_store import ModelStore
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer_nodes.testing import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
                          unique_domain_id, wait_until)
 
 rclpy = pytest.importorskip("rclpy")

@@ -1,4 +1,4 @@
-"""lpa_transfer.correspondences: pairing two robots' babbling samples, and correspondence files.
+"""lpa_transfer.exploration.correspondences: pairing two robots' babbling samples, and correspondence files.
 
 The collections drive real pybullet simulators of the §3.6 robots
 (scenarios/robots/two_link_{source,target}.toml)."""
@@ -8,23 +8,25 @@ import types
 import numpy as np
 import pytest
 
-from lpa_transfer import inverse_kinematics
-from lpa_transfer.babbling import BabblingProgram, Kinematics, planar_kinematics
-from lpa_transfer.correspondences import (DEFAULT_FEATURES, FEATURES,
-                                          CorrespondenceSet, check_guided_exploration,
-                                          collect_correspondences,
-                                          collect_guided_correspondences, feature_names,
-                                          feature_vector, load_correspondences,
-                                          load_guided_exploration,
-                                          planned_commands, run_commands)
-from lpa_transfer.kinematics import domain_data, end_effector_rmse
-from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.goal_babbling import GoalBabbling
-from lpa_transfer.guided_exploration import guided_exploration
-from lpa_transfer.kinematics import planar_forward_kinematics
-from lpa_transfer.robot_environment import stepped_environment
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots import inverse_kinematics
+from lpa_transfer.exploration.babbling import BabblingProgram
+from lpa_transfer.robots.kinematics import Kinematics, planar_kinematics
+from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, FEATURES,
+                                                      CorrespondenceSet, check_guided_exploration,
+                                                      collect_correspondences,
+                                                      collect_guided_correspondences,
+                                                      feature_names, feature_vector,
+                                                      load_correspondences,
+                                                      load_guided_exploration, planned_commands,
+                                                      run_commands)
+from lpa_transfer.robots.kinematics import domain_data, end_effector_rmse
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
+from lpa_transfer.exploration.guided import guided_exploration
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.environment import stepped_environment
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from two_link import elbow_ik, robot
 
 SOURCE = planar_kinematics(robot("two_link_source"))

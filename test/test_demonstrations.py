@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from lpa_transfer.demonstrations import (LETTER_SHAPES, Placement, lasa_shape_names,
-                                         letter_layout, load_lasa, load_pbdlib_letter,
-                                         place_in_task_space)
-from lpa_transfer.serial_chain import rpy_matrix
+from lpa_transfer.lfd.demonstrations import (LETTER_SHAPES, Placement, lasa_shape_names,
+                                             letter_layout, load_lasa, load_pbdlib_letter,
+                                             place_in_task_space)
+from lpa_transfer.robots.serial_chain import rpy_matrix
 
 BOX = (np.array([0.2, -0.3, 0.1]), np.array([0.6, 0.3, 0.5]))
 

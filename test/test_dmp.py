@@ -9,8 +9,8 @@ from movement_primitives.dmp._forcing_term import ForcingTerm
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
-from lpa_transfer.demonstrations import load_lasa
-from lpa_transfer.dmp import JointDMP
+from lpa_transfer.lfd.demonstrations import load_lasa
+from lpa_transfer.lfd.dmp import JointDMP
 
 GOAL_SHIFT = np.array([0.2, -0.1, 0.05, 0.3])
 

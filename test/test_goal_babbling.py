@@ -1,4 +1,4 @@
-"""lpa_transfer.goal_babbling: online goal babbling (Alg. 6) and its exploration noise (eq. 6.1).
+"""lpa_transfer.goal_babbling.goal_babbling: online goal babbling (Alg. 6) and its exploration noise (eq. 6.1).
 
 The robots are the 2-link arms of the thesis' goal-babbling experiment (Table 6.1), built
 from their lengths here: the robot files two_link_source/target.toml are the §3.6 arms.
@@ -6,10 +6,10 @@ from their lengths here: the robot files two_link_source/target.toml are the §3
 import numpy as np
 import pytest
 
-from lpa_transfer.goal_babbling import (ExplorationNoise, GoalBabbling, check_x_bounds,
-                                        subtargets)
-from lpa_transfer.kinematics import planar_forward_kinematics
-from lpa_transfer.reaching import evaluate_reaching, evaluation_points
+from lpa_transfer.goal_babbling.goal_babbling import ExplorationNoise, GoalBabbling, subtargets
+from lpa_transfer._validation import check_x_bounds
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points
 from two_link import GB_HOME, TABLE_6_1_LIMITS, GB_TARGET_BOUNDS, GB_TARGET_LINKS, table_6_1_arm
 
 def babble(seed, n_steps, **hyperparameters):

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 rclpy = pytest.importorskip("rclpy")
-from lpa_transfer.kinematics import planar_forward_kinematics  # noqa: E402
+from lpa_transfer.robots.kinematics import planar_forward_kinematics  # noqa: E402
 from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation  # noqa: E402
 from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor  # noqa: E402
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402

@@ -1,12 +1,12 @@
-"""lpa_transfer.guided_exploration: correspondences from guided exploration (Alg. 7, §6.4)."""
+"""lpa_transfer.exploration.guided: correspondences from guided exploration (Alg. 7, §6.4)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import Kinematics
-from lpa_transfer.goal_babbling import GoalBabbling
-from lpa_transfer.guided_exploration import (guided_exploration, hold_at_home, pad_transferred,
-                                             restrict, shared_limits)
-from lpa_transfer.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.kinematics import Kinematics
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
+from lpa_transfer.exploration.guided import guided_exploration, shared_limits
+from lpa_transfer.robots.kinematics import hold_at_home, pad_transferred, restrict
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
 from two_link import GB_SOURCE_LINKS, GB_TARGET_BOUNDS, GB_TARGET_LINKS, table_6_1_arm
 
 #: A 3-joint target whose first joint the 2-joint source lacks (as Poppy's torso, §6.5.2).

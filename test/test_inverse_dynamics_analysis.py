@@ -1,17 +1,21 @@
 """The chapter 5 experiment's analysis: trials to convergence, time saved, joining runs."""
 import json
-import sys
+import runpy
 
 import numpy as np
 import pytest
 
 from conftest import ROOT
+from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
+                                                    bootstrap_savings, convergence_table,
+                                                    paired_against, trials_to_convergence)
+from lpa_transfer.inverse_dynamics.report import merge
 
-pytest.importorskip("rclpy")
-sys.path.insert(0, str(ROOT / "scenarios" / "inverse_dynamics"))
-from merge_results import main as merge_main, merge  # noqa: E402
-from run_experiment import (CONDITIONS, TRIAL_SECONDS, bootstrap_savings,  # noqa: E402
-                            convergence_table, paired_against, trials_to_convergence)
+
+def merge_main(argv):
+    """The scenario's thin merge_results.py, run as a script would be."""
+    script = ROOT / "scenarios" / "inverse_dynamics" / "merge_results.py"
+    return runpy.run_path(str(script))["main"](argv)
 
 SETTINGS = {"robots": ["a", "b"], "stars": ["star1"], "n_trials": 3, "tolerance": 0.1,
             "babbling_seconds": 2.0}

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 rclpy = pytest.importorskip("rclpy")
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402

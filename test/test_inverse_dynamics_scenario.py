@@ -4,20 +4,18 @@ experiment step took 290 s beside two other experiments on the 2 cores, hence th
 youBot <-> Pincher (config.yaml), and youBot <-> 2-link arm (5 and 2 joints)."""
 import csv
 import json
-import sys
 
 import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer.bag import summary
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.serial_chain import forward_kinematics
-from ros_harness import run_scenario
+from lpa_transfer.inverse_dynamics.report import merge
+from lpa_transfer.recording.bag import summary
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.serial_chain import forward_kinematics
+from lpa_transfer_nodes.testing import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
-sys.path.insert(0, str(SCENARIO))
-from merge_results import merge  # noqa: E402
 pytestmark = pytest.mark.timeout(600)   # over setup.cfg's 300 s: each run takes minutes
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")

@@ -1,10 +1,10 @@
-"""lpa_transfer.inverse_kinematics: damped-least-squares IK over a forward-kinematics callable,
+"""lpa_transfer.robots.inverse_kinematics: damped-least-squares IK over a forward-kinematics callable,
 on the §3.6 2-link robots (scenarios/robots/two_link_{source,target}.toml)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.inverse_kinematics import jacobian, solve, solve_many, solve_path
-from lpa_transfer.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.inverse_kinematics import jacobian, solve, solve_many, solve_path
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
 from two_link import TARGET_LINKS, elbow_ik, robot
 
 ROBOTS = ("two_link_source", "two_link_target")

@@ -1,9 +1,9 @@
-"""Planar forward kinematics and domain data of the §3.6 example (lpa_transfer.kinematics)."""
+"""Planar forward kinematics and domain data of the §3.6 example (lpa_transfer.robots.kinematics)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.kinematics import (domain_data, end_effector_rmse, planar_forward_kinematics,
-                                     sample_joint_uniform)
+from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
+                                            planar_forward_kinematics, sample_joint_uniform)
 
 LENGTHS = (0.6, 0.2)  # target robot of Table 3.1
 

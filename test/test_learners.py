@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
-from lpa_transfer.kinematics import planar_forward_kinematics, sample_joint_uniform
-from lpa_transfer.learners import LocallyWeightedRegression
+from lpa_transfer.robots.kinematics import planar_forward_kinematics, sample_joint_uniform
+from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
 
 LIMITS = [[0.0, np.pi / 2], [0.0, np.pi]]   # Table 3.1
 

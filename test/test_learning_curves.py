@@ -1,9 +1,9 @@
-"""Time to reach a level and time saved (lpa_transfer.learning_curves, thesis §6.5)."""
+"""Time to reach a level and time saved (lpa_transfer.evaluation.learning_curves, thesis §6.5)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.learning_curves import (paired_comparison, rank_sum_comparison, time_saved,
-                                          time_to_reach)
+from lpa_transfer.evaluation.learning_curves import (paired_comparison, rank_sum_comparison,
+                                                     time_saved, time_to_reach)
 
 TIMES = np.array([300.0, 600.0, 900.0, 1200.0, 1500.0])
 

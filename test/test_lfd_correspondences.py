@@ -1,5 +1,5 @@
 """Correspondences human -> robot for goal-directed imitation (thesis §4.4.2-4.5):
-lpa_transfer.lfd_correspondences with the joint maps and task frames of
+lpa_transfer.lfd.correspondences with the joint maps and task frames of
 scenarios/lfd/frames.yaml."""
 import numpy as np
 import pytest
@@ -8,13 +8,13 @@ from scipy.spatial import cKDTree
 
 from conftest import ROOT
 from test_lfd_robots import human_to_meka, human_to_pr2
-from lpa_transfer.lfd_correspondences import (JointMap, TaskFrame, arm_kinematics,
-                                              babbling_limits, collect_correspondences,
-                                              mapping_error)
-from lpa_transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.serial_chain import forward_kinematics, rpy_matrix
+from lpa_transfer.lfd.correspondences import (JointMap, TaskFrame, babbling_limits,
+                                              collect_demonstrator_correspondences, mapping_error)
+from lpa_transfer.robots.kinematics import arm_kinematics
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.serial_chain import forward_kinematics, rpy_matrix
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "frames.yaml").read_text())
 HALF_PI = np.pi / 2
@@ -39,7 +39,7 @@ def meka():
 @pytest.fixture(scope="module")
 def meka_pairs(human, meka):
     robot, joint_map, frame = meka
-    return collect_correspondences(robot, human, joint_map, frame, n=200, seed=0)
+    return collect_demonstrator_correspondences(robot, human, joint_map, frame, n=200, seed=0)
 
 
 def full(q4):
@@ -142,7 +142,7 @@ def test_correspondences_reach_the_same_task_point(human, meka, meka_pairs):
 
 def test_correspondences_are_seeded(human, meka):
     robot, joint_map, frame = meka
-    first, again, other = (collect_correspondences(robot, human, joint_map, frame, 20, seed)
+    first, again, other = (collect_demonstrator_correspondences(robot, human, joint_map, frame, 20, seed)
                            for seed in (3, 3, 4))
     for a, b in ((first.demonstrator, again.demonstrator), (first.robot, again.robot)):
         np.testing.assert_array_equal(a, b)
@@ -168,10 +168,10 @@ def test_lpa_maps_held_out_rows_better_than_pa(human, meka, meka_pairs):
     pairs of another seed by the thesis' mapping error ||FK_R(q̂_R) − x_R||. Measured (m):
     median PA 0.0277, LPA 0.0237; mean PA 0.0344, LPA 0.0339 (20 local maps of 13 or more
     points in 7-D). With so few pairs LPA's lead is small (the thesis trained on up to
-    21 000 pairs; see lpa_transfer.lfd_experiment for the sweep). The mapped task
+    21 000 pairs; see lpa_transfer.lfd.experiment for the sweep). The mapped task
     coordinates x̂_R are exact for both: x_R is an affine function of x_H."""
     robot, joint_map, frame = meka
-    train = collect_correspondences(robot, human, joint_map, frame, 500, seed=1)
+    train = collect_demonstrator_correspondences(robot, human, joint_map, frame, 500, seed=1)
     assert train.n_kept >= 400
     test = meka_pairs                    # seed 0: other babbled poses
     errors = {}
@@ -201,7 +201,7 @@ def test_babbling_limits_share_the_demonstrators_range(human):
     np.testing.assert_allclose(shared[[1, 3]], arm.joint_limits[[1, 3]])
     np.testing.assert_array_equal(babbling_limits(arm, demonstrator, joint_map, "robot"),
                                   arm.joint_limits)
-    c = collect_correspondences(robot, human, joint_map, setup("pr2_right_arm")[2], 50, 0)
+    c = collect_demonstrator_correspondences(robot, human, joint_map, setup("pr2_right_arm")[2], 50, 0)
     assert (c.robot[:, 2] >= shared[2, 0]).all() and (c.robot[:, 2] <= shared[2, 1]).all()
     with pytest.raises(ValueError, match="babble_range"):
         babbling_limits(arm, demonstrator, joint_map, "everywhere")
@@ -243,9 +243,9 @@ def test_bad_input_raises(human, meka):
                    dict(ik_tolerance=np.nan), dict(robot_home=[0.0] * 6),
                    dict(robot_home=[np.nan] + [0.0] * 6), dict(demonstrator_home=[5.0] * 7)):
         with pytest.raises(ValueError):
-            collect_correspondences(robot, human, joint_map, frame, **{"n": 5, "seed": 0,
+            collect_demonstrator_correspondences(robot, human, joint_map, frame, **{"n": 5, "seed": 0,
                                                                        **kwargs})
-    c = collect_correspondences(robot, human, joint_map, frame, 30, seed=0)
+    c = collect_demonstrator_correspondences(robot, human, joint_map, frame, 30, seed=0)
     model = ProcrustesAnalysis().fit(c.demonstrator, c.robot)
     bad = c.demonstrator.copy()
     bad[0, 0] = np.nan

@@ -1,4 +1,4 @@
-"""Chapter 4's in-process experiment (thesis §4.5): lpa_transfer.lfd_experiment (the
+"""Chapter 4's in-process experiment (thesis §4.5): lpa_transfer.lfd.experiment (the
 scenario, demonstrations, correspondences, mapping error) and scenarios/lfd/accuracy.py on its
 smoke configuration; the sweeps and skills are in test_lfd_skills.py."""
 import csv
@@ -10,10 +10,9 @@ import pytest
 import yaml
 
 from conftest import ROOT
-from lpa_transfer.inverse_kinematics import solve_many
-from lpa_transfer.lfd_correspondences import arm_kinematics
-from lpa_transfer.lfd_experiment import (collect_pairs, demonstrations, executed_errors,
-                                         load_setup)
+from lpa_transfer.robots.inverse_kinematics import solve_many
+from lpa_transfer.robots.kinematics import arm_kinematics
+from lpa_transfer.lfd.experiment import collect_pairs, demonstrations, executed_errors, load_setup
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "config.yaml").read_text())[
     "/**"]["ros__parameters"]

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer import serial_chain
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots import serial_chain
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 ROBOTS = ROOT / "scenarios" / "robots"
 NAMES = ("pr2_right_arm", "meka_right_arm", "human_arm")

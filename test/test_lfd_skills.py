@@ -1,13 +1,13 @@
-"""Skills from transferred demonstrations (thesis §4.4.4-4.5.3): lpa_transfer.lfd_skills on
+"""Skills from transferred demonstrations (thesis §4.4.4-4.5.3): lpa_transfer.lfd.skills on
 small configurations of scenarios/lfd (2 letters, 2 demonstrations each)."""
 import numpy as np
 import pytest
 import yaml
 
 from conftest import ROOT
-from lpa_transfer.dmp import JointDMP
-from lpa_transfer.lfd_experiment import demonstrations, executed_errors, load_setup
-from lpa_transfer.lfd_skills import (CONDITIONS, accuracy_sweep, between, by_shape,
+from lpa_transfer.lfd.dmp import JointDMP
+from lpa_transfer.lfd.experiment import demonstrations, executed_errors, load_setup
+from lpa_transfer.lfd.skills import (CONDITIONS, accuracy_sweep, between, by_shape,
                                      encoding_errors, ik_method_errors, multi_robot_transfer,
                                      robot_ik_demonstrations)
 

@@ -4,9 +4,10 @@ import pytest
 from sklearn.exceptions import NotFittedError
 from sklearn.mixture import GaussianMixture
 
-from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis, gmm
-from lpa_transfer.init_em import cluster_errors, init_em
-from lpa_transfer.procrustes import grouped_moments, procrustes_maps
+from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
+from lpa_transfer.transfer import gmm
+from lpa_transfer.transfer.init_em import cluster_errors, init_em
+from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 from two_link import correspondences, mapping_rmse_mm
 
 # Thesis §3.5: keep c_min small and control the number of clusters with N_min (§3.6: 7).

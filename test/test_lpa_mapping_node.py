@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.model_store import file_name
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
+from lpa_transfer.transfer.model_store import file_name
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 from two_link import correspondences
 
 rclpy = pytest.importorskip("rclpy")

@@ -1,4 +1,4 @@
-"""LWPR (lpa_transfer.lwpr): learning, receptive-field bookkeeping, API and input checks.
+"""LWPR (lpa_transfer.learners.lwpr): learning, receptive-field bookkeeping, API and input checks.
 
 Accuracy thresholds were measured with the seeds used here and on two further seeds and have
 a margin above the worst of them (noted next to each). nMSE = MSE / variance of the
@@ -10,7 +10,7 @@ from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.estimator_checks import check_estimator
 
-from lpa_transfer.lwpr import LWPR
+from lpa_transfer.learners.lwpr import LWPR
 
 #: The 2-D "cross" function of the LWPR paper (Vijayakumar et al. 2005) and reference library.
 CROSS = dict(init_D=25.0, init_alpha=250.0, w_gen=0.2, norm_in=1.0)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.model_store import ModelStore, file_name, matrix_from_rows, training_rmse
+from lpa_transfer.transfer.model_store import ModelStore, file_name, matrix_from_rows, training_rmse
 from two_link import correspondences
 
 ID = "pincher->youbot/left arm"

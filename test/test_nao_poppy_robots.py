@@ -8,12 +8,12 @@ import pytest
 import yaml
 
 from conftest import ROOT
-from lpa_transfer import serial_chain
-from lpa_transfer.babbling import robot_kinematics
-from lpa_transfer.guided_exploration import shared_limits
-from lpa_transfer.reaching import evaluation_points
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots import serial_chain
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.exploration.guided import shared_limits
+from lpa_transfer.goal_babbling.reaching import evaluation_points
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 ROBOTS = ROOT / "scenarios" / "robots"
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml").read_text())

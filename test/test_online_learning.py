@@ -2,12 +2,13 @@
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import robot_kinematics
-from lpa_transfer.control import PID
-from lpa_transfer.lwpr import LWPR
-from lpa_transfer.online_learning import (FeedForwardLearner, input_scale, make_regressor)
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.tasks import star_task
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.control import PID
+from lpa_transfer.learners.lwpr import LWPR
+from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
+                                                           make_regressor)
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.inverse_dynamics.tasks import star_task
 from two_link import robot
 
 DT = 0.01

@@ -7,8 +7,8 @@ import pytest
 
 p = pytest.importorskip("pybullet")
 
-from lpa_transfer.planar_chain import (GRAVITY, babbling_trajectory, inverse_dynamics,  # noqa: E402
-                                       inverse_dynamics_babbling, planar_chain_urdf)
+from lpa_transfer.robots.planar_chain import (GRAVITY, babbling_trajectory, inverse_dynamics,  # noqa: E402
+                                              inverse_dynamics_babbling, planar_chain_urdf)
 
 LENGTHS, MASSES = (0.3, 0.25, 0.2), (1.5, 1.0, 0.5)
 

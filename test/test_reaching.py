@@ -1,12 +1,13 @@
-"""lpa_transfer.reaching: test points through the reachable workspace, reaching error and rate
+"""lpa_transfer.goal_babbling.reaching: test points through the reachable workspace, reaching error and rate
 (§6.5), on the Table 6.1 target arm."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from lpa_transfer.reaching import (Reaching, coverage, evaluate_reaching, evaluation_points,
-                                   grid, reachable_share, reaching_errors, reaching_rate)
+from lpa_transfer.goal_babbling.reaching import (Reaching, coverage, evaluate_reaching,
+                                                 evaluation_points, grid, reachable_share,
+                                                 reaching_errors, reaching_rate)
 from two_link import GB_HOME, GB_TARGET_LINKS, TABLE_6_1_LIMITS, elbow_ik, table_6_1_arm
 
 

@@ -4,8 +4,8 @@ import time
 
 import pytest
 
-from lpa_transfer import bag
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
+from lpa_transfer.recording import bag
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
 
 rclpy = pytest.importorskip("rclpy")
 from rclpy.duration import Duration  # noqa: E402

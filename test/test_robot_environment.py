@@ -1,13 +1,13 @@
-"""A pybullet robot behind goal babbling's environment (lpa_transfer.robot_environment)."""
+"""A pybullet robot behind goal babbling's environment (lpa_transfer.robots.environment)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import execute, robot_kinematics
-from lpa_transfer.goal_babbling import GoalBabbling
-from lpa_transfer.guided_exploration import guided_exploration
-from lpa_transfer.robot_environment import stepped_environment, task_dims
-from lpa_transfer.robot_params import load_robot_params
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots.kinematics import execute, robot_kinematics
+from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
+from lpa_transfer.exploration.guided import guided_exploration
+from lpa_transfer.robots.environment import stepped_environment, task_dims
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 ROBOTS = "scenarios/robots/goal_babbling_{}.toml"
 HOME = [-0.785398, 1.65]

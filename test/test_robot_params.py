@@ -4,7 +4,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.robots.params import load_robot_params
 
 ROBOTS = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
 VALID = """name = "arm"

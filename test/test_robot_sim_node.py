@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer.kinematics import planar_forward_kinematics
-from lpa_transfer.robot_params import load_robot_params
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 rclpy = pytest.importorskip("rclpy")
 from sensor_msgs.msg import JointState  # noqa: E402

@@ -1,10 +1,10 @@
-"""lpa_transfer.sensorimotor: the weighted K-nearest-neighbour sensorimotor models (§6.3.2)."""
+"""lpa_transfer.learners.sensorimotor: the weighted K-nearest-neighbour sensorimotor models (§6.3.2)."""
 import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
 
-from lpa_transfer.sensorimotor import (KNNRegressor, SensorimotorModel, make_model,
-                                       make_sensorimotor_model)
+from lpa_transfer.learners.sensorimotor import (KNNRegressor, SensorimotorModel, make_model,
+                                                make_sensorimotor_model)
 
 
 def data(n, seed=0, d=2, m=3):

@@ -1,4 +1,4 @@
-"""lpa_transfer.simulator: the pybullet robot simulator behind the robot_sim node."""
+"""lpa_transfer.robots.simulator: the pybullet robot simulator behind the robot_sim node."""
 from pathlib import Path
 
 import numpy as np
@@ -6,10 +6,10 @@ import pytest
 
 pytest.importorskip("pybullet")
 
-from lpa_transfer.kinematics import planar_forward_kinematics  # noqa: E402
-from lpa_transfer.planar_chain import planar_chain_urdf  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
-from lpa_transfer.simulator import RobotSimulator, robot_urdf  # noqa: E402
+from lpa_transfer.robots.kinematics import planar_forward_kinematics  # noqa: E402
+from lpa_transfer.robots.planar_chain import planar_chain_urdf  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf  # noqa: E402
 
 SOURCE = load_robot_params(Path(__file__).resolve().parents[1] / "scenarios" / "robots"
                            / "two_link_source.toml")

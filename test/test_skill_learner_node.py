@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
+from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 rclpy = pytest.importorskip("rclpy")
-from lpa_transfer.lfd_correspondences import arm_kinematics  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer.robots.kinematics import arm_kinematics  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction  # noqa: E402
 from lpa_transfer_interfaces.srv import LearnSkill  # noqa: E402
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402

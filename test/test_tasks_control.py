@@ -4,11 +4,12 @@ import types
 import numpy as np
 import pytest
 
-from lpa_transfer.babbling import robot_kinematics
-from lpa_transfer.control import PID, start_servo
-from lpa_transfer.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.tasks import (minimum_jerk, joint_trajectory, star_task, star_tips,
-                                star_trajectory, tracking_error)
+from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.control import PID, start_servo
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots.trajectories import minimum_jerk
+from lpa_transfer.inverse_dynamics.tasks import (joint_trajectory, star_task, star_tips,
+                                                 star_trajectory, tracking_error)
 from two_link import robot
 
 DT = 0.01

@@ -1,13 +1,14 @@
-"""lpa_transfer.transfer_babbling: transfer of goal-babbling experience (§6.4-§6.5) and the
+"""lpa_transfer.goal_babbling.transfer: transfer of goal-babbling experience (§6.4-§6.5) and the
 negative-transfer guard (§6.6)."""
 import numpy as np
 import pytest
 
-from lpa_transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.sensorimotor import make_sensorimotor_model
-from lpa_transfer.goal_babbling_experiment import Experiment1, run_condition
-from lpa_transfer.negative_transfer import COVERED, DISAGREED, GuardedModel, chain_lipschitz
-from lpa_transfer.transfer_babbling import initialise_with_transfer, transfer_experience
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
+from lpa_transfer.goal_babbling.experiment import Experiment1, run_condition
+from lpa_transfer.goal_babbling.negative_transfer import (COVERED, DISAGREED, GuardedModel,
+                                                          chain_lipschitz)
+from lpa_transfer.goal_babbling.transfer import initialise_with_transfer, transfer_experience
 from two_link import GB_TARGET_LINKS
 
 SMALL = Experiment1(source_seconds=150, total_seconds=120, guided_seconds=30, interval=30,

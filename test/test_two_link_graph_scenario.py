@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer.bag import read_messages, summary
-from lpa_transfer.model_store import ModelStore
-from ros_harness import run_scenario, unique_domain_id, wait_until
+from lpa_transfer.recording.bag import read_messages, summary
+from lpa_transfer.transfer.model_store import ModelStore
+from lpa_transfer_nodes.testing import run_scenario, unique_domain_id, wait_until
 
 SCENARIO = ROOT / "scenarios" / "two_link_graph"
 MODEL_ID = "two_link_source->two_link_target"

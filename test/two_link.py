@@ -4,8 +4,9 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.babbling import Kinematics
-from lpa_transfer.kinematics import domain_data, planar_forward_kinematics, sample_joint_uniform
+from lpa_transfer.robots.kinematics import Kinematics
+from lpa_transfer.robots.kinematics import (domain_data, planar_forward_kinematics,
+                                            sample_joint_uniform)
 
 SOURCE_LINKS, TARGET_LINKS = (0.3, 0.25), (0.6, 0.2)
 JOINT_LIMITS = [(0.0, np.pi / 2), (0.0, np.pi)]

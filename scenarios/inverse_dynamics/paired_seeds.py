@@ -6,11 +6,8 @@ Usage: ``python scenarios/inverse_dynamics/paired_seeds.py RUN_DIR [EARLY_TRIALS
 (after ``source tools/env.sh``; EARLY_TRIALS defaults to 5).
 """
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from merge_results import read_run  # noqa: E402
-from run_experiment import paired_lines  # noqa: E402
+from lpa_transfer.inverse_dynamics.report import paired_lines, read_run
 
 
 def main(argv):

@@ -50,6 +50,6 @@ step experiment python "$HERE/run_experiment.py" "${PAIRS[@]}" "${PARAMS[@]}" \
 stop_all
 [ $FAILED = 0 ] || { echo "error: a node did not stop cleanly" >&2; exit 1; }
 WALL=$(python -c "import time; print(f'{time.time() - $START:.0f}')")
-python -m lpa_transfer.bag "$OUT/run.mcap" >>"$OUT/report.txt"
+python -m lpa_transfer.recording.bag "$OUT/run.mcap" >>"$OUT/report.txt"
 echo "whole run (nodes' start-up included): $WALL s of wall time" >>"$OUT/report.txt"
 cat "$OUT/report.txt"; echo "run directory: $OUT" >&2

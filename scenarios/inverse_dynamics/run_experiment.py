@@ -37,39 +37,25 @@ Writes into ``output_dir``: ``results.json`` (every curve), ``learning_curves.cs
 ``fig5_6_traces.png`` (first and last trial from scratch on Star 2, like Fig. 5-6) and
 ``report.txt`` (trials to convergence and training time saved, beside the thesis' numbers).
 """
-import csv
-import json
 import sys
 import time
 from pathlib import Path
 
 import matplotlib
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import ScalarFormatter  # noqa: E402
 import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.correspondences import load_correspondences  # noqa: E402
-from lpa_transfer.learning_curves import paired_comparison  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer.exploration.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.inverse_dynamics.analysis import CONDITIONS  # noqa: E402
+from lpa_transfer.inverse_dynamics.report import write_outputs  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
                                          TransferPoints)
 from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
                                           to_matrix, wait_for_services)
-
-CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
-              "own+transfer-LPA")
-SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # in results.json
-            "start_noise")
-TRIAL_SECONDS = 8.4
-BOOTSTRAP_RESAMPLES = 2000
-OTHER_TOLERANCES = (0.05, 0.2)   # the report's check of how the verdict depends on it
-THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
-                    "63% of training time saved (random init: 4.6%)",
-          "pincher": "58.7% of training time saved (random init: 15.8%)"}
 
 
 class Experiment(Node):
@@ -221,242 +207,6 @@ def _trace(msg):
 
 
 # --------------------------------------------------------------------------- analysis
-def trials_to_convergence(curve, reference_final, tolerance, stay=True):
-    """First trial (1-based) from which the error stays within (1 + tolerance) of the scratch
-    learner's final error (``stay=False``: the first trial within it); len(curve) + 1 when
-    there is none."""
-    threshold = (1 + tolerance) * reference_final
-    curve = np.asarray(curve)
-    if not stay:
-        within = np.flatnonzero(curve <= threshold)
-        return int(within[0]) + 1 if len(within) else len(curve) + 1
-    above = np.flatnonzero(curve > threshold)
-    return 1 if len(above) == 0 else int(above[-1]) + 2
-
-
-def conditions_in(curves):
-    """The CONDITIONS that ``curves`` holds, in their order (results written before a
-    condition existed lack it)."""
-    present = {key.rsplit("/", 1)[1] for key in curves}
-    return [c for c in CONDITIONS if c in present]
-
-
-def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=True):
-    """Per target robot: trials to convergence per star and condition (mean curves; ``stay``
-    as in :func:`trials_to_convergence`), and the training time saved against learning from
-    scratch, as §5.5.3 computes it."""
-    rows, savings, conditions = [], {}, conditions_in(curves)
-    for robot in robots:
-        seconds = {c: 0.0 for c in conditions}
-        for star in stars:
-            mean = {c: np.mean(curves[f"{robot}/{star}/{c}"], axis=0) for c in conditions}
-            final = mean["uninitialised"][-1]
-            for condition in conditions:
-                k = trials_to_convergence(mean[condition], final, tolerance, stay)
-                rows.append((robot, star, condition, k, len(mean[condition])))
-                seconds[condition] += k * TRIAL_SECONDS
-        for condition in conditions[1:]:
-            seconds[condition] += babbling_seconds
-        savings[robot] = {c: 1 - seconds[c] / seconds["uninitialised"] for c in conditions[1:]}
-    return rows, savings
-
-
-def bootstrap_savings(curves, robots, stars, tolerance, babbling_seconds, n_resamples=2000,
-                      seed=0, reference="random"):
-    """How sure the time saved is, given the seeds: :func:`convergence_table`'s savings over
-    ``n_resamples`` resamples of the seeds (drawn with replacement, the same seeds for every
-    condition, as every seed ran all of them). Per target robot and initialised condition:
-    ``(low, high, beats)``, the 2.5 and 97.5 percentiles of its saving and the share of
-    resamples in which it saves more than, as much as and less than ``reference`` (nan for
-    ``reference`` itself)."""
-    n_seeds = len(next(iter(curves.values())))
-    rng = np.random.default_rng(seed)
-    draws = {}
-    for _ in range(n_resamples):
-        picks = rng.integers(n_seeds, size=n_seeds)
-        _, savings = convergence_table({key: np.asarray(runs)[picks] for key, runs in
-                                        curves.items()}, robots, stars, tolerance,
-                                       babbling_seconds)
-        for robot, saved in savings.items():
-            for condition, value in saved.items():
-                draws.setdefault(robot, {}).setdefault(condition, []).append(value)
-    summary = {}
-    for robot, by_condition in draws.items():
-        base = np.asarray(by_condition.get(reference, np.nan))
-        summary[robot] = {c: (*np.percentile(v, [2.5, 97.5]), *(
-            (np.mean(np.asarray(v) > base), np.mean(np.asarray(v) == base),
-             np.mean(np.asarray(v) < base)) if c != reference and reference in by_condition
-            else 3 * (float("nan"),))) for c, v in by_condition.items()}
-    return summary
-
-
-def paired_against(curves, robots, stars, early_trials=5, reference="random"):
-    """Each initialised condition against ``reference`` seed by seed (a seed's conditions
-    share its start and its babbling, so they pair): per robot, star and condition, for the
-    mean error over the first ``early_trials`` trials and over all trials, ``(lower, n, p)``:
-    in how many of the ``n`` seeds the condition's error is below the reference's, and
-    :func:`lpa_transfer.learning_curves.paired_comparison`'s p (Wilcoxon signed-rank)."""
-    def compare(ours, theirs):
-        _, lower, n, p = paired_comparison(ours, theirs)
-        return lower, n, p
-
-    table = {}
-    for robot in robots:
-        for star in stars:
-            base = np.asarray(curves[f"{robot}/{star}/{reference}"])
-            for condition in conditions_in(curves)[1:]:
-                if condition == reference:
-                    continue
-                runs = np.asarray(curves[f"{robot}/{star}/{condition}"])
-                table[robot, star, condition] = (
-                    compare(runs[:, :early_trials].mean(1), base[:, :early_trials].mean(1)),
-                    compare(runs.mean(1), base.mean(1)))
-    return table
-
-
-def paired_lines(curves, robots, stars, early_trials=5, reference="random"):
-    """The report's lines of :func:`paired_against`."""
-    lines = [f"paired over seeds against {reference}: seeds in which the condition's mean error "
-             f"is lower / seeds (Wilcoxon signed-rank p), over trials 1-{early_trials} and over "
-             f"all trials"]
-    for (robot, star, condition), (early, whole) in paired_against(
-            curves, robots, stars, early_trials, reference).items():
-        lines.append(f"  {robot:<9} {star:<6} {condition:<16} " + ",  ".join(
-            f"{lower:>2}/{n} (p {p:.3f})" for lower, n, p in (early, whole)))
-    return lines
-
-
-def simulated_seconds(curves, experiment):
-    """Simulated time per robot: its trials (learning from scratch runs once, whatever the
-    number of seeds, unless ``start_noise`` > 0) and the babbling of every seed."""
-    once = experiment.start_noise == 0
-    trials = sum(len(runs[0]) if once and key.endswith("/uninitialised")
-                 else sum(map(len, runs)) for key, runs in curves.items() if runs)
-    return (trials * TRIAL_SECONDS / len(experiment.robots)
-            + len(experiment.done_seeds) * experiment.babbling_seconds)
-
-
-def write_outputs(curves, traces, experiment, out):
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "results.json").write_text(json.dumps({
-        "settings": {key: getattr(experiment, key) for key in SETTINGS},
-        "curves_m": curves, "seeds": experiment.done_seeds,
-        "traces": {f"{r}/{s}": t for (r, s), t in traces.items()}}) + "\n")
-    with open(out / "learning_curves.csv", "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["target", "star", "condition", "seed", "trial", "tracking_error_m"])
-        for key, runs in curves.items():
-            robot, star, condition = key.split("/")
-            for seed, errors in zip(experiment.done_seeds, runs):
-                writer.writerows([robot, star, condition, seed, trial + 1, repr(error)]
-                                 for trial, error in enumerate(errors))
-    plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
-    plot_traces(traces, experiment, out / "fig5_6_traces.png")
-    args = (curves, experiment.robots, experiment.stars, experiment.tolerance,
-            experiment.babbling_seconds)
-    rows, savings = convergence_table(*args)
-    first_rows, first_savings = convergence_table(*args, stay=False)
-    intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
-    other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
-                                  experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
-    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s) "
-             f"({', '.join(map(str, experiment.done_seeds))}), "
-             f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
-             f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "
-             f"within': the first trial within it", "",
-             f"{'target':<9} {'star':<6} {'condition':<16} {'converged':>9} {'first within':>12}"
-             f"   tracking error (mm, mean ± std over seeds): trial 1, trials 1-5, all, last"]
-    for (r, s, c, k, n), (*_, first, _) in zip(rows, first_rows):
-        runs = 1e3 * np.asarray(curves[f"{r}/{s}/{c}"])
-        early, whole = runs[:, :5].mean(axis=1), runs.mean(axis=1)
-        lines.append(f"{r:<9} {s:<6} {c:<16} {k if k <= n else f'> {n}':>9} "
-                     f"{first if first <= n else f'> {n}':>12}   "
-                     f"{runs[:, 0].mean():5.2f} ± {runs[:, 0].std():4.2f}, "
-                     f"{early.mean():5.2f} ± {early.std():4.2f}, "
-                     f"{whole.mean():5.2f} ± {whole.std():4.2f}, "
-                     f"{runs[:, -1].mean():5.2f} ± {runs[:, -1].std():4.2f}")
-    lines.append("")
-    for robot in savings:
-        lines.append(f"{robot} as target, training time saved (trials x 8.4 s, + "
-                     f"{experiment.babbling_seconds:g} s babbling for initialised runs), "
-                     f"converged: " + ", ".join(f"{c} {100 * v:.1f}%"
-                                                for c, v in savings[robot].items()))
-        lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
-                                                    for c, v in first_savings[robot].items()))
-        lines.append(f"  converged within {' / '.join(f'{t:.0%}' for t in OTHER_TOLERANCES)} "
-                     f"of scratch's final error instead: " + ", ".join(
-                         f"{c} " + " / ".join(f"{100 * other[t][robot][c]:.1f}"
-                                              for t in OTHER_TOLERANCES) + "%"
-                         for c in savings[robot]))
-        lines.append(f"  95% interval over seeds (bootstrap, {BOOTSTRAP_RESAMPLES} resamples of "
-                     f"the seeds), converged: " + ", ".join(
-                         f"{c} [{100 * low:.1f}, {100 * high:.1f}]%"
-                         for c, (low, high, *_) in intervals[robot].items()))
-        lines.append("  share of resamples saving more / as much / less than random: "
-                     + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
-                                 for c, (_, _, more, same, less) in intervals[robot].items()
-                                 if c != "random"))
-        lines.append(f"  thesis: {THESIS.get(robot, '-')}")
-    lines.append("")
-    if "random" in conditions_in(curves):
-        lines += paired_lines(curves, experiment.robots, experiment.stars) + [""]
-    lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
-                 f"{TRIAL_SECONDS} s, learning from scratch "
-                 f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")
-    text = "\n".join(lines) + "\n"
-    (out / "report.txt").write_text(text)
-    return text
-
-
-def plot_curves(curves, experiment, path):
-    fig, axes = plt.subplots(len(experiment.robots), len(experiment.stars), squeeze=False,
-                             figsize=(6 * len(experiment.stars), 4.2 * len(experiment.robots)),
-                             constrained_layout=True)
-    for row, robot in enumerate(experiment.robots):
-        for col, star in enumerate(experiment.stars):
-            ax = axes[row, col]
-            for condition in conditions_in(curves):
-                runs = np.asarray(curves[f"{robot}/{star}/{condition}"]) * 1e3
-                trials = np.arange(1, runs.shape[1] + 1)
-                mean, std = runs.mean(axis=0), runs.std(axis=0)
-                line, = ax.plot(trials, mean, marker="o", ms=3, label=condition,
-                                linestyle="--" if condition.startswith("own+") else "-")
-                ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
-                                alpha=0.15)
-            final = np.mean(curves[f"{robot}/{star}/uninitialised"], axis=0)[-1] * 1e3
-            ax.axhline((1 + experiment.tolerance) * final, color="black", linewidth=0.8,
-                       linestyle=":", label=f"converged: within {experiment.tolerance:.0%} "
-                                            f"of scratch's final")
-            ax.set(title=f"{robot} learning {star}", xlabel="trial",
-                   ylabel="tracking error (mm, log scale)", yscale="log")
-            ax.yaxis.set_major_formatter(ScalarFormatter())   # 2, 3, 5 mm, not 2×10⁰
-            ax.yaxis.set_minor_formatter(ScalarFormatter())
-            ax.grid(True, which="both", alpha=0.3)
-            ax.legend()
-    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s) "
-                 f"(a trial is 8.4 s)")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def plot_traces(traces, experiment, path):
-    star = experiment.stars[-1]
-    fig, axes = plt.subplots(1, len(experiment.robots), squeeze=False,
-                             figsize=(6 * len(experiment.robots), 5), constrained_layout=True)
-    for ax, robot in zip(axes[0], experiment.robots):
-        first, last = traces[robot, star]
-        desired = np.asarray(first["desired"])
-        ax.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired")
-        for trace, style in ((first, "tab:red"), (last, "tab:blue")):
-            actual = np.asarray(trace["actual"])
-            ax.plot(actual[:, 0], actual[:, 1], color=style, lw=1,
-                    label=f"trial {trace['trial']}")
-        ax.set(title=f"{robot}, {star}, learning from scratch", xlabel="x (m)",
-               ylabel="y (m)", aspect="equal")
-        ax.legend()
-    fig.suptitle("Thesis Fig. 5-6: end effector in the first and last trial")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def main(args=None):

@@ -26,11 +26,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
 
-from lpa_transfer.dmp import JointDMP  # noqa: E402
-from lpa_transfer.lfd_experiment import demonstrations, load_setup  # noqa: E402
-from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, SweepErrors,  # noqa: E402
-                                     TransferErrors, accuracy_sweep, ik_method_errors,
-                                     multi_robot_transfer)
+from lpa_transfer.lfd.dmp import JointDMP  # noqa: E402
+from lpa_transfer.lfd.experiment import demonstrations, load_setup  # noqa: E402
+from lpa_transfer.lfd.skills import (CONDITIONS, THESIS_TABLE, SweepErrors, TransferErrors,  # noqa: E402
+                                     accuracy_sweep, ik_method_errors, multi_robot_transfer)
 
 ROOT = Path(__file__).resolve().parents[2]
 THESIS_SWEEP = ("thesis §4.5.1-4.5.2 (Fig. 4-10/4-12, 5 runs): the mapping improves with more "

@@ -8,7 +8,7 @@ Running: ``demonstration_source`` (the human's demonstrations on ``demonstration
 = the robot's name in frames.yaml), and the recorder. For every robot:
 
 1. Correspondences (§4.4.2): motor babbling on the robot and the human's IK, in process
-   (:func:`lpa_transfer.lfd_experiment.collect_pairs`: forward kinematics, as the thesis'
+   (:func:`lpa_transfer.lfd.experiment.collect_pairs`: forward kinematics, as the thesis'
    "simulated motor babbling"), ``graph_pairs`` of them with seed ``graph_seed``.
 2. ``/lpa_mapping/fit``: an LPA (``graph_n_min``, ``c_min``) human -> robot on them.
 3. ``/lpa_mapping/transfer``: every demonstration, whole, onto the robot (Alg. 4).
@@ -43,10 +43,10 @@ import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.lfd_correspondences import arm_kinematics  # noqa: E402
-from lpa_transfer.lfd_experiment import Demonstration, collect_pairs, load_setup  # noqa: E402
-from lpa_transfer.lfd_skills import (CONDITIONS, THESIS_TABLE, between,  # noqa: E402
-                                     by_shape, mapping_error, robot_ik_demonstrations)
+from lpa_transfer.robots.kinematics import arm_kinematics  # noqa: E402
+from lpa_transfer.lfd.experiment import Demonstration, collect_pairs, load_setup  # noqa: E402
+from lpa_transfer.lfd.skills import (CONDITIONS, THESIS_TABLE, between, by_shape,  # noqa: E402
+                                     mean_mapping_error, robot_ik_demonstrations)
 from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
@@ -157,7 +157,7 @@ class Experiment(Node):
         joints = {"transferred": [m[:, :n] for m in mapped],
                   "ik_method": [d.q for d in robot_ik_demonstrations(learner, demos)]}
         result = {"pairs": self.pairs, "babbled": tried, "clusters": clusters,
-                  "mapping_error": mapping_error(learner, demos, np.vstack(mapped))}
+                  "mapping_error": mean_mapping_error(learner, demos, np.vstack(mapped))}
         firsts = {shape: members[0] for shape, members in by_shape(demos).items()}
         forward = arm_kinematics(learner.robot, n).forward
         traces = {"demonstrated": {s: learner.task_frame.to_robot(demos[i].x)
@@ -198,7 +198,7 @@ class Experiment(Node):
         for condition, mapped in via.items():
             errors, traces[condition] = self.encoding(
                 names[1], demos, [m[:, :learner.joint_map.n_joints] for m in mapped], targets)
-            table[condition] = {"mapping_error": mapping_error(learner, demos, np.vstack(mapped)),
+            table[condition] = {"mapping_error": mean_mapping_error(learner, demos, np.vstack(mapped)),
                                 "encoding_error": float(np.mean(list(errors.values())))}
         return {condition: table[condition] for condition in CONDITIONS}, traces
 

@@ -38,10 +38,10 @@ from matplotlib.ticker import (FormatStrFormatter, LogLocator, NullFormatter,  #
 from tqdm import tqdm  # noqa: E402
 
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis  # noqa: E402
-from lpa_transfer.kinematics import (domain_data, end_effector_rmse,  # noqa: E402
-                                     planar_forward_kinematics, sample_joint_uniform)
-from lpa_transfer.learners import LocallyWeightedRegression  # noqa: E402
-from lpa_transfer.robot_params import load_robot_params  # noqa: E402
+from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,  # noqa: E402
+                                            planar_forward_kinematics, sample_joint_uniform)
+from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression  # noqa: E402
+from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 TRANSFER_METHODS = ("PA", "LPA")

@@ -28,12 +28,14 @@ import numpy as np
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer.babbling import BabblingProgram, planar_kinematics
-from lpa_transfer.correspondences import DEFAULT_FEATURES, load_correspondences, run_commands
-from lpa_transfer.kinematics import (domain_data, end_effector_rmse, planar_forward_kinematics,
-                                     sample_joint_uniform)
-from lpa_transfer.learners import LocallyWeightedRegression
-from lpa_transfer.robot_params import load_robot_params
+from lpa_transfer.exploration.babbling import BabblingProgram
+from lpa_transfer.robots.kinematics import planar_kinematics
+from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, load_correspondences,
+                                                      run_commands)
+from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
+                                            planar_forward_kinematics, sample_joint_uniform)
+from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
+from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.srv import StepRobot, TransferPoints
 from lpa_transfer_nodes._ros_util import (call_service, from_matrix, robot_stepper, run_job,
                                           to_matrix, wait_for_services)

@@ -1,0 +1,379 @@
+"""Correspondences between two robots collected by babbling, and their files (no rclpy).
+
+A correspondence pairs a source-robot point with a target-robot point (thesis ch. 3, §3.1).
+The collector drives both robots (anything with ``step(command, n_steps) -> state``, the
+state having ``time``, ``positions``, ``velocities``, ``efforts``, ``end_effector`` like
+:class:`lpa_transfer.robots.simulator.SimState`) through one :class:`~lpa_transfer.exploration.babbling.BabblingProgram`
+and pairs their samples by one of three rules — each thesis domain uses a different one:
+
+* ``"same_command"``: the target executes the source's joint commands on their common
+  joints (the first min(n_s, n_t)); other joints stay at home. §3.6 pairs the two 2-link
+  robots at equal joint angles; §6.4.2's guided exploration runs the same commands on both.
+  Joint-line waypoints are drawn inside the intersection of the two robots' joint limits.
+* ``"same_time_index"``: each robot runs the program in its own space (joint lines scaled to
+  its own limits, or the same task lines through its own inverse kinematics) and sample i of
+  the source pairs with sample i of the target (§5.4.1).
+* ``"same_task_point"``: the source runs the program; after each of its samples the target
+  is sent, by its inverse kinematics, to the point the source's end effector reached (plus
+  ``task_offset``, the target's frame relative to the source's); §4.4.2.
+
+Each sample is the robot's state after ``steps_per_sample`` physics steps, as the
+concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (backward
+difference of velocities over the clock's difference rounded to 1 ns: the difference of two
+float clock readings carries a rounding error that grows with the time already run, and
+LWPR's online learning magnifies such last-digit differences into different curves, so a
+seed's run would depend on what the simulator ran before it), ``effort`` (one value per
+joint) and ``ee_x``/``ee_y``/``ee_z`` (end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
+z = (q, x) of a planar arm.
+
+Guided exploration (§6.4.2, Alg. 7) is the fourth way, with its own pairing:
+:func:`collect_guided_correspondences` lets the target goal-babble (Alg. 6) on the joints it
+shares with the source, then the source executes the same commands; pair i is each robot's
+observed (q̄, x) for command i (pairing rule ``same_command``).
+"""
+import copy
+import os
+import zipfile
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from lpa_transfer._validation import check_float, check_int, check_x_bounds
+from lpa_transfer.robots import inverse_kinematics
+from lpa_transfer.robots.kinematics import execute, overlapping_limits, pad_transferred
+from lpa_transfer.robots.simulator import elapsed
+from lpa_transfer.exploration.guided import (check_target_range, explored_target,
+                                             followed_commands, guided_exploration)
+from lpa_transfer.exploration.guided import shared_limits
+
+PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
+JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
+TASK_FEATURES = ("ee_x", "ee_y", "ee_z")
+FEATURES = JOINT_FEATURES + TASK_FEATURES
+DEFAULT_FEATURES = ("position", "ee_x", "ee_y")
+
+
+def check_features(features):
+    features = tuple(features)
+    unknown = [f for f in features if f not in FEATURES]
+    if not features or unknown or len(set(features)) != len(features):
+        raise ValueError(f"features must be distinct names from {FEATURES}, got {list(features)}")
+    return features
+
+
+def feature_vector(state, previous, features):
+    """The sample of ``state`` (see module docstring); ``previous`` gives the acceleration."""
+    parts = []
+    for name in features:
+        if name == "acceleration":
+            parts.append((np.asarray(state.velocities) - previous.velocities)
+                         / elapsed(state, previous))
+        elif name in TASK_FEATURES:
+            parts.append([state.end_effector[TASK_FEATURES.index(name)]])
+        else:
+            parts.append(getattr(state, {"position": "positions", "velocity": "velocities",
+                                         "effort": "efforts"}[name]))
+    return np.concatenate(parts).astype(np.float64)
+
+
+def feature_names(features, joint_names):
+    """Column names of the samples, e.g. ``position/joint1``, ``ee_x``."""
+    return [f"{name}/{joint}" if name in JOINT_FEATURES else name
+            for name in features for joint in (joint_names if name in JOINT_FEATURES else [""])]
+
+
+@dataclass
+class CorrespondenceSet:
+    """Paired samples: row i of ``source`` corresponds to row i of ``target``."""
+
+    source: np.ndarray
+    target: np.ndarray
+    source_robot: str = ""
+    target_robot: str = ""
+    pairing_rule: str = ""
+    features: tuple = DEFAULT_FEATURES
+    sim_time: float = 0.0            # simulated seconds the source robot babbled
+    complete: bool = True            # False when collection was stopped early
+    metadata: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return len(self.source)
+
+    def save(self, path):
+        """Write an ``.npz`` (``source``, ``target`` and the metadata as strings/scalars)
+        atomically: a temporary file renamed into place, so a reader never sees half a file."""
+        path = os.fspath(path)
+        temporary = f"{path}.tmp.npz"
+        np.savez(temporary, source=self.source, target=self.target,
+                 source_robot=self.source_robot, target_robot=self.target_robot,
+                 pairing_rule=self.pairing_rule, features=np.array(self.features, dtype=str),
+                 sim_time=self.sim_time, complete=self.complete,
+                 **{f"meta_{k}": np.asarray(v) for k, v in self.metadata.items()})
+        os.replace(temporary, path)
+
+
+def _read_arrays(path, optional=()):
+    """The ``source`` and ``target`` arrays of a correspondence file (``.npz`` with those
+    keys) and a dict of those ``optional`` members it holds, read from one opening."""
+    unreadable = (OSError, EOFError, ValueError, zipfile.BadZipFile)   # e.g. a truncated file
+    try:
+        archive = np.load(os.fspath(path), allow_pickle=False)
+    except unreadable as exc:
+        raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise ValueError(f"correspondence file {path} is not an .npz archive")
+    with archive:
+        missing = [key for key in ("source", "target") if key not in archive.files]
+        if missing:
+            raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
+                             f"(has {archive.files})")
+        try:
+            return archive["source"], archive["target"], {
+                key: archive[key] for key in optional if key in archive.files}
+        except unreadable as exc:   # a damaged member, object arrays
+            raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+
+
+def load_correspondences(path):
+    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
+    source, target, _ = _read_arrays(path)
+    return source, target
+
+
+def load_guided_exploration(path):
+    """A guided-exploration file (:func:`collect_guided_correspondences`) as ``(source_pairs,
+    target_pairs, target_experience, followed)``: the correspondences, the target's rows of
+    all N commands and which of them the source followed (N,) bool. A file without the last
+    two (every pair a correspondence) gives ``target_pairs`` and all True."""
+    source, target, extra = _read_arrays(path, ("meta_followed", "meta_target_experience"))
+    if "meta_followed" not in extra:
+        return source, target, target, np.ones(len(target), dtype=bool)
+    if "meta_target_experience" not in extra:
+        raise ValueError(f"guided-exploration file {path} has meta_followed but no "
+                         f"meta_target_experience")
+    followed = extra["meta_followed"].astype(bool)
+    experience = extra["meta_target_experience"]
+    if followed.shape != (len(experience),) or followed.sum() != len(target):
+        raise ValueError(f"guided-exploration file {path}: {int(followed.sum())} followed "
+                         f"commands of {len(followed)}, {len(experience)} rows of experience "
+                         f"and {len(target)} pairs do not agree")
+    return source, target, experience, followed
+
+
+def common_joint_limits(source, target):
+    """Intersection of the two robots' limits on their common (first) joints."""
+    n_common = min(source.n_joints, target.n_joints)
+    return overlapping_limits(source.joint_limits[:n_common], target.joint_limits[:n_common],
+                              "same_command needs overlapping joint ranges; the common joints")
+
+
+def with_home(commands, home):
+    """Commands for all joints of a robot: the given columns, then its home values."""
+    return pad_transferred(commands, home, np.arange(commands.shape[1]))
+
+
+def check_pairing_rule(pairing_rule):
+    if pairing_rule not in PAIRING_RULES:
+        raise ValueError(f"pairing_rule must be one of {PAIRING_RULES}, got {pairing_rule!r}")
+    return pairing_rule
+
+
+def planned_commands(program, pairing_rule, source, target):
+    """(source commands, target commands or None when the target follows online)."""
+    check_pairing_rule(pairing_rule)
+    if pairing_rule == "same_time_index":
+        return program.commands(source), program.commands(target)
+    if pairing_rule == "same_task_point" or program.program == "task_lines":
+        source_commands = program.commands(source)
+    else:
+        limits = common_joint_limits(source, target)
+        start = np.clip(source.home[:len(limits)], limits[:, 0], limits[:, 1])
+        source_commands = with_home(program.joint_commands(limits, start), source.home)
+    if pairing_rule == "same_task_point":
+        return source_commands, None
+    return source_commands, with_home(source_commands[:, :min(source.n_joints,
+                                                              target.n_joints)], target.home)
+
+
+def task_point_command(target, end_effector, task_offset, previous_command):
+    """The target's joint command for the source's end-effector point (same_task_point):
+    the first len(task_offset) end-effector coordinates, shifted by ``task_offset``."""
+    point = np.asarray(end_effector[:len(task_offset)], dtype=np.float64) + task_offset
+    command, _ = inverse_kinematics.solve(target.forward, point, previous_command,
+                                          target.joint_limits)
+    return command
+
+
+def run_commands(commands, step, steps_per_sample, features, home, should_stop=None):
+    """One robot's babbling without a partner (its own experience): ``(samples, sim_time)``.
+
+    The robot first settles at ``home`` for one sample period (not recorded)."""
+    features = check_features(features)
+    check_int(steps_per_sample, "steps_per_sample", 1)
+    previous = start = step(home, steps_per_sample)
+    samples = []
+    for command in commands:
+        if should_stop is not None and should_stop():
+            break
+        state = step(command, steps_per_sample)
+        samples.append(feature_vector(state, previous, features))
+        previous = state
+    return _rows(samples), elapsed(previous, start)
+
+
+def collect_correspondences(program, pairing_rule, source, target, step_source, step_target,
+                            steps_per_sample, features=DEFAULT_FEATURES, task_offset=None,
+                            on_pair=None, should_stop=None):
+    """Drive both robots through ``program`` and pair their samples (module docstring).
+
+    ``source``/``target`` are :class:`~lpa_transfer.robots.kinematics.Kinematics`; ``step_*`` advance
+    the robots; ``on_pair(index, source_sample, target_sample)`` sees each pair as it is made;
+    ``should_stop()`` ends collection early (the result then has ``complete=False``). Returns
+    a :class:`CorrespondenceSet` (robot names left empty for the caller).
+    """
+    features = check_features(features)
+    check_int(steps_per_sample, "steps_per_sample", 1)
+    source_commands, target_commands = planned_commands(program, pairing_rule, source, target)
+    offset = np.zeros(0) if task_offset is None else np.asarray(task_offset, dtype=np.float64)
+    if pairing_rule == "same_task_point":
+        n_task = target.forward(target.home[None]).shape[1]
+        offset = np.zeros(n_task) if offset.size == 0 else offset
+        if offset.shape != (n_task,) or not np.isfinite(offset).all():
+            raise ValueError(f"task_offset needs {n_task} finite values, got {task_offset}")
+    source_previous = source_start = step_source(source.home, steps_per_sample)
+    target_previous = step_target(target.home, steps_per_sample)
+    target_command = target.home
+    pairs_source, pairs_target, complete = [], [], True
+    for index, source_command in enumerate(source_commands):
+        if should_stop is not None and should_stop():
+            complete = False
+            break
+        source_state = step_source(source_command, steps_per_sample)
+        if target_commands is None:
+            target_command = task_point_command(target, source_state.end_effector, offset,
+                                                target_command)
+        else:
+            target_command = target_commands[index]
+        target_state = step_target(target_command, steps_per_sample)
+        pairs_source.append(feature_vector(source_state, source_previous, features))
+        pairs_target.append(feature_vector(target_state, target_previous, features))
+        if on_pair is not None:
+            on_pair(index, pairs_source[-1], pairs_target[-1])
+        source_previous, target_previous = source_state, target_state
+    return CorrespondenceSet(_rows(pairs_source), _rows(pairs_target), pairing_rule=pairing_rule,
+                             features=features, sim_time=elapsed(source_previous, source_start),
+                             complete=complete)
+
+
+def _rows(samples):
+    """Samples as an (N, D) array; (0, 0) when there are none."""
+    return np.array(samples) if samples else np.empty((0, 0))
+
+
+# -- guided exploration (§6.4.2, Alg. 7) ------------------------------------------------------
+class _Stopped(Exception):
+    """Raised inside a robot's ``execute`` when ``should_stop()`` ends a guided collection."""
+
+
+def _observing(environment, joints, n_task, should_stop, on_row):
+    """``environment`` (a Kinematics) executing its commands one at a time: before each,
+    ``should_stop()`` may end the collection (:class:`_Stopped`); after each, ``on_row(row)``
+    sees the observed row (q̄, x): the positions of ``joints`` and the task point."""
+    def run(commands):
+        commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
+        positions, points = [], []
+        for command in commands:
+            if should_stop is not None and should_stop():
+                raise _Stopped
+            q, x = execute(environment, command[None])
+            positions.append(q[0])
+            points.append(x[0])
+            on_row(np.concatenate((q[0, joints], x[0])))
+        return (np.reshape(positions, commands.shape),
+                np.reshape(points, (len(commands), n_task)))
+
+    return replace(environment, forward=lambda commands: run(commands)[1],
+                               execute=run)
+
+
+def check_guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
+                             target_range="shared"):
+    """Check a guided collection's set-up before any robot moves; ValueError if it is bad.
+
+    ``source``/``target`` must be kinematic models (their ``forward`` must not run a robot,
+    e.g. :func:`lpa_transfer.robots.kinematics.robot_kinematics`): a copy of ``babbling`` is started on
+    the restricted target, which checks its hyperparameters, home and ``x_bounds`` against the
+    target's task space. Returns the (d_c, 2) shared joint limits.
+    """
+    check_float(seconds, "seconds", 0)
+    limits = shared_limits(source, target, source_joints, target_joints)
+    kinematic = replace(target, execute=None)
+    copy.copy(babbling).start(explored_target(kinematic, target_joints, limits, target_range))
+    return limits
+
+
+def collect_guided_correspondences(babbling, source, target, source_joints, target_joints,
+                                   seconds, on_pair=None, should_stop=None, model=None,
+                                   target_range="shared"):
+    """Guided exploration (thesis §6.4.2, Alg. 7) as a correspondence collection.
+
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
+    target's task space); ``source``/``target`` are environments (Kinematics whose commands
+    run on the robots, e.g. :func:`lpa_transfer.robots.environment.stepped_environment`).
+    ``source_joints[i]`` of the source is ``target_joints[i]`` of the target (the shared
+    joints Q̄). The target goal-babbles for ``seconds`` simulated seconds moving the shared
+    joints only, its other joints at home, within ``target_range`` (``shared`` or ``own``
+    ranges, :mod:`lpa_transfer.exploration.guided`), learning ``model`` (default: a fresh
+    one; then ``babbling.model_``); the source then executes the same commands (clipped into
+    the shared ranges), its other joints at its home
+    (:func:`lpa_transfer.exploration.guided.guided_exploration`). Row i holds each robot's
+    observed (q̄, x) for command i: the positions its shared joints reached and its task
+    point; the pairs of the commands the source followed are the correspondences.
+    ``on_pair(index, source_row, target_row)`` sees each correspondence as it is made, as the
+    source executes command ``index``. ``should_stop()`` (checked before every command of
+    either robot) ends the collection early: only the commands both robots executed count
+    (none while the target is still babbling) and ``complete`` is False.
+
+    Returns a :class:`CorrespondenceSet` of the correspondences: pairing rule
+    ``same_command``, features (``position``, ``ee_x``, …) with ``position`` the shared
+    joints only, ``sim_time`` the source's execution time on goal babbling's clock (commands
+    / ``steps_per_second``), and the hyperparameters in ``metadata``, with ``followed`` (N,)
+    bool and ``target_experience`` (N, d_c + m), the target's rows of all N commands, for
+    :func:`load_guided_exploration`; robot names are left empty for the caller.
+    """
+    check_float(seconds, "seconds", 0)
+    check_target_range(target_range)
+    limits = shared_limits(source, target, source_joints, target_joints)  # before a step
+    low, high = check_x_bounds(babbling.x_bounds)
+    n_task = len(low)
+    target_rows, source_rows, followed = [], [], []
+
+    def on_source_row(row):
+        index = len(source_rows)
+        source_rows.append(row)
+        followed.append(bool(followed_commands(babbling.commands_[index], limits)[0]))
+        if on_pair is not None and followed[-1]:
+            on_pair(index, row, target_rows[index + 1])    # target_rows[0]: its home
+
+    try:
+        guided_exploration(
+            babbling, _observing(source, source_joints, n_task, should_stop, on_source_row),
+            _observing(target, target_joints, n_task, should_stop, target_rows.append),
+            source_joints, target_joints, seconds, model, target_range)
+        complete = True
+    except _Stopped:
+        complete = False
+    source_rows, experience = _rows(source_rows), _rows(target_rows[1:len(source_rows) + 1])
+    followed = np.array(followed, dtype=bool)
+    metadata = dict(guided_seconds=float(seconds), x_low=low, x_high=high,
+                    source_joints=np.asarray(source_joints),
+                    target_joints=np.asarray(target_joints), target_range=target_range,
+                    n_subtargets=babbling.n_subtargets, sigma=babbling.sigma,
+                    drift=babbling.drift, p_home=babbling.p_home,
+                    steps_per_second=babbling.steps_per_second, seed=babbling.seed,
+                    followed=followed, target_experience=experience)
+    return CorrespondenceSet(
+        source_rows[followed], experience[followed],
+        pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],
+        sim_time=len(followed) / babbling.steps_per_second, complete=complete,
+        metadata=metadata)

@@ -1,0 +1,102 @@
+"""Guided exploration: correspondences for transferring sensorimotor data (thesis §6.4, Alg. 7;
+no rclpy).
+
+The source robot Ω_s and the target robot Ω_t share d_c ≤ min(d_s, d_t) joints (the motor
+subspace Q̄, e.g. Nao's and Poppy's four common arm joints, §6.5.2). The target explores for
+T_guided with goal babbling (Alg. 6) moving only those joints, the others held at its home
+values; the source then executes the same sequence of shared commands q̄ on its own body,
+its other joints at its home (Alg. 7). Pairing the two by command gives the correspondences
+{(q̄, x_s)} and {(q̄, x_t)} in R^{d_c + m} from which a domain mapping f is learned (§6.4.1).
+On simulated robots (:mod:`lpa_transfer.robots.environment`) each side's q̄ is the joint
+positions that robot reached for the command, so the two may differ slightly.
+
+Which range the target explores (``target_range``; Alg. 7 does not say):
+
+* ``"shared"``: the intersection of both robots' ranges of the shared joints, so that both
+  bodies execute every command exactly and every pair is a correspondence.
+* ``"own"``: the target's own ranges. The source executes each command clipped into the
+  shared ranges (as a position-controlled robot clips a command beyond its limits); only the
+  pairs whose command lay inside them are correspondences (``followed``), while every
+  movement stays the target's own experience. Where the target's range is wider (Poppy's
+  elbow bends to 148°, Nao's to 88.5°, §6.5.2), the target then learns that part of its
+  body during guided exploration instead of waiting for it.
+
+Transferred source data hold only the d_c shared joints; :func:`pad_transferred` completes
+them with the target's home values for the joints the source lacks (§6.4.1).
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from lpa_transfer.robots.kinematics import check_joints, execute, overlapping_limits, restrict
+
+
+def shared_limits(source, target, source_joints, target_joints):
+    """(d_c, 2) intersection of the ranges of the shared joints (source_joints[i] of the
+    source corresponds to target_joints[i] of the target); ValueError if one is empty."""
+    source_joints = check_joints(source_joints, source.n_joints, "source_joints")
+    target_joints = check_joints(target_joints, target.n_joints, "target_joints")
+    if len(source_joints) != len(target_joints):
+        raise ValueError(f"source_joints and target_joints must pair the shared joints one to "
+                         f"one, got {len(source_joints)} and {len(target_joints)}")
+    return overlapping_limits(np.asarray(source.joint_limits)[source_joints],
+                              np.asarray(target.joint_limits)[target_joints], "the shared joints")
+
+
+TARGET_RANGES = ("shared", "own")
+
+
+class GuidedPairs(NamedTuple):
+    """What guided exploration observed, one row per movement of the target."""
+
+    source: np.ndarray     # (N, d_c + m) the source's rows (q̄_s, x_s)
+    target: np.ndarray     # (N, d_c + m) the target's rows (q̄_t, x_t): all its own experience
+    followed: np.ndarray   # (N,) bool: the source could execute command i (inside the shared
+    #                        ranges), so row i of both is a correspondence
+
+    def correspondences(self):
+        """``(source_pairs, target_pairs)``: the followed rows only."""
+        return self.source[self.followed], self.target[self.followed]
+
+
+def check_target_range(target_range):
+    """``target_range`` if it is one of :data:`TARGET_RANGES`; ValueError if not."""
+    if target_range not in TARGET_RANGES:
+        raise ValueError(f"target_range must be one of {TARGET_RANGES}, got {target_range!r}")
+    return target_range
+
+
+def explored_target(target, target_joints, limits, target_range):
+    """The target (a Kinematics) as guided exploration babbles it: only ``target_joints``
+    free, within the shared ranges ``limits`` (``"shared"``) or its own (``"own"``)."""
+    explored = limits if check_target_range(target_range) == "shared" else None
+    return restrict(target, target_joints, explored)
+
+
+def followed_commands(commands, limits):
+    """(N,) bool: which commands (N, d_c) lie inside the shared ranges ``limits`` (d_c, 2)."""
+    commands = np.atleast_2d(np.asarray(commands, dtype=np.float64))
+    return np.all((commands >= limits[:, 0]) & (commands <= limits[:, 1]), axis=1)
+
+
+def guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
+                       model=None, target_range="shared"):
+    """Alg. 7 with the target's goal babbling: a :class:`GuidedPairs` of (N, d_c + m) rows
+    (q̄, x), the same command behind row i of both.
+
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
+    target's task space, its ``home`` None or over the shared joints); it explores the target
+    restricted to ``target_joints`` for ``seconds`` simulated seconds, learning ``model``
+    (default: a fresh one; afterwards ``babbling.model_``), within the ranges ``target_range``
+    names (module docstring). The source then executes the commands, clipped into the
+    shared ranges, with its ``source_joints``.
+    """
+    limits = shared_limits(source, target, source_joints, target_joints)
+    babbling.start(explored_target(target, target_joints, limits, target_range), model)
+    target_joint_values, target_points = babbling.run_for(seconds)
+    commands = babbling.commands_
+    source_joint_values, source_points = execute(
+        restrict(source, source_joints, limits), np.clip(commands, limits[:, 0], limits[:, 1]))
+    return GuidedPairs(np.hstack((source_joint_values, source_points)),
+                       np.hstack((target_joint_values, target_points)),
+                       followed_commands(commands, limits))

@@ -1,0 +1,253 @@
+"""Chapter 5's run outputs: results.json, learning_curves.csv, the Fig. 5-6 and Fig. 5-7/5-8
+figures and report.txt; and joining the outputs of runs that each ran a share of the seeds or
+conditions.
+
+``experiment`` is anything with the attributes of :data:`SETTINGS` plus ``done_seeds`` (the
+experiment node, or the settings read back from a results.json).
+"""
+import csv
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.ticker import ScalarFormatter
+
+from lpa_transfer.inverse_dynamics.analysis import (TRIAL_SECONDS, bootstrap_savings,
+                                                    conditions_in, convergence_table,
+                                                    paired_against, simulated_seconds)
+
+
+SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # in results.json
+            "start_noise")
+
+
+BOOTSTRAP_RESAMPLES = 2000
+
+
+OTHER_TOLERANCES = (0.05, 0.2)   # the report's check of how the verdict depends on it
+
+
+THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
+                    "63% of training time saved (random init: 4.6%)",
+          "pincher": "58.7% of training time saved (random init: 15.8%)"}
+
+
+def paired_lines(curves, robots, stars, early_trials=5, reference="random"):
+    """The report's lines of :func:`paired_against`."""
+    lines = [f"paired over seeds against {reference}: seeds in which the condition's mean error "
+             f"is lower / seeds (Wilcoxon signed-rank p), over trials 1-{early_trials} and over "
+             f"all trials"]
+    for (robot, star, condition), (early, whole) in paired_against(
+            curves, robots, stars, early_trials, reference).items():
+        lines.append(f"  {robot:<9} {star:<6} {condition:<16} " + ",  ".join(
+            f"{lower:>2}/{n} (p {p:.3f})" for lower, n, p in (early, whole)))
+    return lines
+
+
+def write_outputs(curves, traces, experiment, out):
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "results.json").write_text(json.dumps({
+        "settings": {key: getattr(experiment, key) for key in SETTINGS},
+        "curves_m": curves, "seeds": experiment.done_seeds,
+        "traces": {f"{r}/{s}": t for (r, s), t in traces.items()}}) + "\n")
+    with open(out / "learning_curves.csv", "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["target", "star", "condition", "seed", "trial", "tracking_error_m"])
+        for key, runs in curves.items():
+            robot, star, condition = key.split("/")
+            for seed, errors in zip(experiment.done_seeds, runs):
+                writer.writerows([robot, star, condition, seed, trial + 1, repr(error)]
+                                 for trial, error in enumerate(errors))
+    plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
+    plot_traces(traces, experiment, out / "fig5_6_traces.png")
+    args = (curves, experiment.robots, experiment.stars, experiment.tolerance,
+            experiment.babbling_seconds)
+    rows, savings = convergence_table(*args)
+    first_rows, first_savings = convergence_table(*args, stay=False)
+    intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
+    other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
+                                  experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
+    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s) "
+             f"({', '.join(map(str, experiment.done_seeds))}), "
+             f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
+             f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "
+             f"within': the first trial within it", "",
+             f"{'target':<9} {'star':<6} {'condition':<16} {'converged':>9} {'first within':>12}"
+             f"   tracking error (mm, mean ± std over seeds): trial 1, trials 1-5, all, last"]
+    for (r, s, c, k, n), (*_, first, _) in zip(rows, first_rows):
+        runs = 1e3 * np.asarray(curves[f"{r}/{s}/{c}"])
+        early, whole = runs[:, :5].mean(axis=1), runs.mean(axis=1)
+        lines.append(f"{r:<9} {s:<6} {c:<16} {k if k <= n else f'> {n}':>9} "
+                     f"{first if first <= n else f'> {n}':>12}   "
+                     f"{runs[:, 0].mean():5.2f} ± {runs[:, 0].std():4.2f}, "
+                     f"{early.mean():5.2f} ± {early.std():4.2f}, "
+                     f"{whole.mean():5.2f} ± {whole.std():4.2f}, "
+                     f"{runs[:, -1].mean():5.2f} ± {runs[:, -1].std():4.2f}")
+    lines.append("")
+    for robot in savings:
+        lines.append(f"{robot} as target, training time saved (trials x 8.4 s, + "
+                     f"{experiment.babbling_seconds:g} s babbling for initialised runs), "
+                     f"converged: " + ", ".join(f"{c} {100 * v:.1f}%"
+                                                for c, v in savings[robot].items()))
+        lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
+                                                    for c, v in first_savings[robot].items()))
+        lines.append(f"  converged within {' / '.join(f'{t:.0%}' for t in OTHER_TOLERANCES)} "
+                     f"of scratch's final error instead: " + ", ".join(
+                         f"{c} " + " / ".join(f"{100 * other[t][robot][c]:.1f}"
+                                              for t in OTHER_TOLERANCES) + "%"
+                         for c in savings[robot]))
+        lines.append(f"  95% interval over seeds (bootstrap, {BOOTSTRAP_RESAMPLES} resamples of "
+                     f"the seeds), converged: " + ", ".join(
+                         f"{c} [{100 * low:.1f}, {100 * high:.1f}]%"
+                         for c, (low, high, *_) in intervals[robot].items()))
+        lines.append("  share of resamples saving more / as much / less than random: "
+                     + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
+                                 for c, (_, _, more, same, less) in intervals[robot].items()
+                                 if c != "random"))
+        lines.append(f"  thesis: {THESIS.get(robot, '-')}")
+    lines.append("")
+    if "random" in conditions_in(curves):
+        lines += paired_lines(curves, experiment.robots, experiment.stars) + [""]
+    lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
+                 f"{TRIAL_SECONDS} s, learning from scratch "
+                 f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")
+    text = "\n".join(lines) + "\n"
+    (out / "report.txt").write_text(text)
+    return text
+
+
+def plot_curves(curves, experiment, path):
+    fig, axes = plt.subplots(len(experiment.robots), len(experiment.stars), squeeze=False,
+                             figsize=(6 * len(experiment.stars), 4.2 * len(experiment.robots)),
+                             constrained_layout=True)
+    for row, robot in enumerate(experiment.robots):
+        for col, star in enumerate(experiment.stars):
+            ax = axes[row, col]
+            for condition in conditions_in(curves):
+                runs = np.asarray(curves[f"{robot}/{star}/{condition}"]) * 1e3
+                trials = np.arange(1, runs.shape[1] + 1)
+                mean, std = runs.mean(axis=0), runs.std(axis=0)
+                line, = ax.plot(trials, mean, marker="o", ms=3, label=condition,
+                                linestyle="--" if condition.startswith("own+") else "-")
+                ax.fill_between(trials, mean - std, mean + std, color=line.get_color(),
+                                alpha=0.15)
+            final = np.mean(curves[f"{robot}/{star}/uninitialised"], axis=0)[-1] * 1e3
+            ax.axhline((1 + experiment.tolerance) * final, color="black", linewidth=0.8,
+                       linestyle=":", label=f"converged: within {experiment.tolerance:.0%} "
+                                            f"of scratch's final")
+            ax.set(title=f"{robot} learning {star}", xlabel="trial",
+                   ylabel="tracking error (mm, log scale)", yscale="log")
+            ax.yaxis.set_major_formatter(ScalarFormatter())   # 2, 3, 5 mm, not 2×10⁰
+            ax.yaxis.set_minor_formatter(ScalarFormatter())
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend()
+    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s) "
+                 f"(a trial is 8.4 s)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_traces(traces, experiment, path):
+    star = experiment.stars[-1]
+    fig, axes = plt.subplots(1, len(experiment.robots), squeeze=False,
+                             figsize=(6 * len(experiment.robots), 5), constrained_layout=True)
+    for ax, robot in zip(axes[0], experiment.robots):
+        first, last = traces[robot, star]
+        desired = np.asarray(first["desired"])
+        ax.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired")
+        for trace, style in ((first, "tab:red"), (last, "tab:blue")):
+            actual = np.asarray(trace["actual"])
+            ax.plot(actual[:, 0], actual[:, 1], color=style, lw=1,
+                    label=f"trial {trace['trial']}")
+        ax.set(title=f"{robot}, {star}, learning from scratch", xlabel="x (m)",
+               ylabel="y (m)", aspect="equal")
+        ax.legend()
+    fig.suptitle("Thesis Fig. 5-6: end effector in the first and last trial")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+RTOL = 1e-6
+
+
+def read_run(run_dir):
+    """(settings, {key: {seed: curve}}, traces or None) of one run directory."""
+    run_dir = Path(run_dir)
+    if (run_dir / "results.json").exists():
+        result = json.loads((run_dir / "results.json").read_text())
+        cells = {key: dict(zip(result["seeds"], runs))
+                 for key, runs in result["curves_m"].items()}
+        settings = {"start_noise": 0.0, **result["settings"]}   # older runs: no start noise
+        return settings, cells, result["traces"]
+    path = run_dir / "learning_curves.csv"
+    if not path.exists():
+        raise ValueError(f"{run_dir} holds neither results.json nor learning_curves.csv")
+    cells, robots, stars = {}, {}, {}
+    with open(path, newline="") as handle:
+        for row in csv.DictReader(handle):
+            robots[row["target"]] = stars[row["star"]] = None   # ordered sets
+            key = f"{row['target']}/{row['star']}/{row['condition']}"
+            curve = cells.setdefault(key, {}).setdefault(int(row["seed"]), [])
+            if int(row["trial"]) != len(curve) + 1:
+                raise ValueError(f"{path}: {key} seed {row['seed']} trial {row['trial']} "
+                                 f"out of order")
+            curve.append(float(row["tracking_error_m"]))
+    lengths = {len(curve) for seeds in cells.values() for curve in seeds.values()}
+    if len(lengths) != 1:
+        raise ValueError(f"{path}: curves of different lengths {sorted(lengths)}")
+    return ({"robots": list(robots), "stars": list(stars), "n_trials": lengths.pop()},
+            cells, None)
+
+
+def merge(run_dirs):
+    """(curves, traces, experiment-like settings) of the runs in ``run_dirs`` together."""
+    runs = [(run_dir, *read_run(run_dir)) for run_dir in run_dirs]
+    full = [run for run in runs if set(SETTINGS) <= set(run[1])]
+    if not full:
+        raise ValueError("at least one run must have a results.json (settings, traces)")
+    settings, traces = full[0][1], full[0][3]
+    cells, seeds = {}, {}
+    for run_dir, run_settings, run_cells, _ in runs:
+        if any(run_settings.get(key) != settings[key] for key in run_settings):
+            raise ValueError(f"{run_dir} ran other settings: {run_settings} against {settings}")
+        for key, by_seed in run_cells.items():
+            for seed, curve in by_seed.items():
+                seeds[seed] = None
+                known = np.asarray(cells.setdefault(key, {}).setdefault(seed, curve))
+                if known.shape != np.shape(curve) or not np.allclose(curve, known, rtol=RTOL,
+                                                                      atol=0):
+                    raise ValueError(f"{key} seed {seed} differs between runs ({run_dir}) by "
+                                     f"more than a relative {RTOL:g}: {known.tolist()} against "
+                                     f"{list(curve)}; the runs are not reproducible")
+    seeds = list(seeds)
+    for key, by_seed in cells.items():
+        if set(by_seed) != set(seeds):
+            raise ValueError(f"{key} lacks seed(s) {sorted(set(seeds) - set(by_seed))}")
+        if key.endswith("/uninitialised"):
+            check_start_noise(key, by_seed, settings["start_noise"])
+    curves = {key: [by_seed[seed] for seed in seeds] for key, by_seed in cells.items()}
+    return (curves, {tuple(key.split("/")): value for key, value in traces.items()},
+            SimpleNamespace(done_seeds=seeds, **settings))
+
+
+def check_start_noise(key, by_seed, start_noise):
+    """Learning from scratch is the same for every seed without start noise and differs
+    between any two seeds with it. A share run with other start noise (a CSV does not say)
+    breaks that, and so does, without start noise, a share whose last digits differ (the
+    shares of the 10-seed reference gave the youBot's final Star 1 error from scratch as
+    2.31123, 2.31217 and 2.31280 mm, because the acceleration then depended on how long the
+    simulator's clock had run; another host's floating point can do the same); either is
+    refused."""
+    seeds = sorted(by_seed)
+    for i, a in enumerate(seeds):
+        for b in seeds[i + 1:]:
+            same = np.allclose(by_seed[a], by_seed[b], rtol=RTOL, atol=0)
+            if same != (start_noise == 0):
+                cause = ("a share ran with other start noise" if same else "a share ran "
+                         "with other start noise, other code or on a host whose floating "
+                         "point differs; join such shares only with start_noise > 0")
+                raise ValueError(f"{key}: seeds {a} and {b} learn from scratch "
+                                 f"{'alike' if same else 'differently'}, which runs with "
+                                 f"start_noise {start_noise:g} cannot ({cause})")

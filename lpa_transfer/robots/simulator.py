@@ -1,0 +1,301 @@
+"""A robot dynamics simulator on pybullet, for the robot_sim node (no rclpy).
+
+:class:`RobotSimulator` wraps one pybullet DIRECT client (its own client id, passed to every
+call, so several simulators in one process never interfere) and one fixed-base robot loaded
+from URDF with ``URDF_USE_INERTIA_FROM_FILE`` (otherwise pybullet recomputes the inertias
+from the collision shapes). Gravity is −9.81 m/s² along −y, as in :mod:`planar_chain`: the
+planar chains move in the vertical x-y plane.
+
+Control modes (``step`` takes one command per movable joint, in ``joint_names`` order):
+
+* ``"position"``: targets are clipped to the joint limits and tracked by pybullet's
+  POSITION_CONTROL motors with ``forces`` = the effort limits;
+* ``"torque"``: the default velocity motors are disabled first (VELOCITY_CONTROL with
+  force 0, else they brake every joint), torques are clipped to ± the effort limits —
+  pybullet does not enforce URDF effort limits — and applied with TORQUE_CONTROL at every
+  physics step (pybullet clears applied torques after each step).
+
+pybullet's artificial link damping (linear/angular 0.04 by default) is set to 0, so the
+dynamics are the URDF's. There is nothing random in the simulation: the same inputs give the
+same outputs, bit for bit.
+
+Joint drives (:mod:`lpa_transfer.robots.params`, "Drive"):
+
+* viscous damping D, URDF ``<dynamics damping=D>`` (``joint_damping``): pybullet applies
+  τ = −D·q̇ itself in every control mode, explicitly, from the velocity at the start of the
+  physics step — measured: a free joint at q̇ = 2 rad/s with D = 0.5 N·m·s/rad and 0.05 kg·m²
+  loses 0.02 rad/s per 1 ms step, without damping none. Explicit damping diverges once
+  D·dt > 2·(the joint's inertia): the youBot's wrist roll (7e-5 kg·m², D = 1) without its
+  armature ran away to pybullet's 100 rad/s clamp within 10 ms. So in torque mode the
+  simulator switches pybullet's damping off and applies it itself, implicitly (below);
+  position mode keeps pybullet's (its motor constraints hold the joints);
+* armature A (``<lpa:armature>``, :func:`lpa_transfer.robots.serial_chain.urdf_joint_armatures`;
+  ``armature``): pybullet has no armature parameter. In torque mode, when a joint has an
+  armature or damping, the simulator makes the arm move as
+
+      (M(q) + diag(A)) q̈ + h(q, q̇) + D q̇⁺ = τ,   q̇⁺ = q̇ + dt·q̈ (the velocity after the step):
+
+  at every physics step it reads M (``calculateMassMatrix``) and h = Coriolis + gravity
+  (``calculateInverseDynamics`` at q̈ = 0) of the current state and applies τ' = M q̈* + h with
+  q̈* = (M + diag(A + D·dt))⁻¹ (τ − D q̇ − h), so pybullet's own step (M q̈ = τ' − h) produces
+  exactly q̈*. This is the usual rotor model of manipulator dynamics (reflected inertia
+  J_rotor·N² on the diagonal of M); what it leaves out is the spinning rotor's coupling to
+  the joints before it, J_rotor·N and J_rotor, i.e. 1/N and 1/N² of A (1.4 % at the youBot's
+  wrist, N = 71; 0.4 % at the AX-12A's 254). The obvious alternative, adding A about the
+  joint axis to the child link's inertia in the URDF, was measured and rejected: I + A·aaᵀ
+  breaks the rigid-body triangle inequality, and pybullet then sets the link's inertia to
+  zero; a disc-shaped addition (A about the axis, A/2 across it) loads, but pybullet then
+  also adds A to every joint before it with a parallel axis and to the coupling terms
+  (youBot file at q = (0, 0.5, 0.8, 0.5, 0): M_11 grew by 0.47 instead of 0.23 kg·m², M_22 by
+  0.48 instead of 0.33, M_23 by 0.15 instead of 0). Joint-limit and contact impulses still
+  see M alone. The reported efforts are the commanded (clipped) τ. Position mode uses
+  pybullet's motor constraints, which do not see the armature (damping still applies there).
+"""
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lpa_transfer.robots.kinematics import home_pose
+from lpa_transfer.robots.planar_chain import load_fixed_robot
+from lpa_transfer.robots.serial_chain import serial_chain_urdf, urdf_joint_armatures
+
+CONTROL_MODES = ("position", "torque")
+
+
+def robot_urdf(robot):
+    """URDF text of a :class:`lpa_transfer.robots.params.RobotParams` chain, planar or serial.
+
+    :func:`lpa_transfer.robots.serial_chain.serial_chain_urdf`: the file's masses, centres of mass,
+    inertias, limits, joint damping and armature (a planar file's derived ones: the rods of
+    ``planar_chain_urdf``).
+    """
+    return serial_chain_urdf(robot)
+
+
+@dataclass(frozen=True, eq=False)
+class SimState:
+    """The robot's state at ``time`` (s of simulated time since start/reset)."""
+
+    time: float
+    positions: np.ndarray      # (n,) rad (or m for prismatic joints)
+    velocities: np.ndarray     # (n,) rad/s
+    efforts: np.ndarray        # (n,) N·m applied during the last step (clipped command in
+    #                            torque mode, the motor torque in position mode)
+    end_effector: np.ndarray   # (3,) world position of the last link's frame, m
+
+
+def elapsed(state, previous):
+    """Simulated seconds from ``previous`` to ``state``, rounded to 1 ns.
+
+    Clock readings are step counts times the step length; the float difference of two of them
+    carries a rounding error that grows with the time run (at 57,600 ms steps it changed a
+    sample's 9th digit), so without the rounding the same seed gives other samples depending
+    on how long the simulator ran before. Every difference of two clock readings goes through
+    here (acceleration samples, the PID servo's command velocity).
+    """
+    return round(state.time - previous.time, 9)
+
+
+class RobotSimulator:
+    """One fixed-base robot in its own pybullet DIRECT client (see module docstring).
+
+    ``urdf`` is a URDF file path or the URDF text itself. ``initial_positions`` default to
+    zero clipped into the joint limits; given ones must lie within the limits. The end
+    effector is the frame of the robot's last link (the ``tool`` frame of a planar chain).
+    ``seed`` is kept for reproducible noise models; the simulation itself is deterministic.
+
+    ``position_gain`` is the position motors' gain (pybullet's ``positionGains``: the share of
+    the position error the motor constraint removes per step; velocity gain 1). pybullet's
+    default 0.1 lets an arm whose effort limit saturates fall into a limit cycle: measured on
+    the §3.6 target arm (1 ms steps), joint 1 still swung ±3 rad/s at ±20 N·m one second after
+    6 of 100 random targets. At 0.05 all 100 settled within 1e-4 rad.
+
+    ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
+    (module docstring); the armature acts in torque mode.
+    """
+
+    def __init__(self, urdf, control_mode="position", physics_step=1e-3,
+                 initial_positions=None, seed=0, position_gain=0.05):
+        import pybullet as p
+
+        if control_mode not in CONTROL_MODES:
+            raise ValueError(f"control_mode must be one of {CONTROL_MODES}, got {control_mode!r}")
+        if not (isinstance(physics_step, (int, float)) and np.isfinite(physics_step)
+                and physics_step > 0):
+            raise ValueError(f"physics_step must be a positive number of seconds, "
+                             f"got {physics_step!r}")
+        if not (isinstance(position_gain, (int, float)) and 0 < position_gain <= 1):
+            raise ValueError(f"position_gain must be in (0, 1], got {position_gain!r}")
+        self._p, self.control_mode, self.physics_step = p, control_mode, float(physics_step)
+        self.seed, self.position_gain = seed, float(position_gain)
+        self._client = p.connect(p.DIRECT)
+        try:
+            self._load(urdf)
+            self.reset(initial_positions)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- set-up -----------------------------------------------------------------------------
+    def _load(self, urdf):
+        p, cid = self._p, self._client
+        self._body = load_fixed_robot(p, urdf, cid)
+        p.setTimeStep(self.physics_step, physicsClientId=cid)
+        n_all = p.getNumJoints(self._body, physicsClientId=cid)
+        infos = [p.getJointInfo(self._body, j, physicsClientId=cid) for j in range(n_all)]
+        movable = [info for info in infos if info[2] in (p.JOINT_REVOLUTE, p.JOINT_PRISMATIC)]
+        if not movable:
+            raise ValueError("the robot has no revolute or prismatic joint")
+        self._joints = [info[0] for info in movable]
+        self.joint_names = [info[1].decode() for info in movable]
+        limits = []
+        for info in movable:
+            lower, upper = info[8], info[9]
+            # pybullet reports lower > upper for joints without limits (e.g. continuous).
+            limits.append((lower, upper) if lower <= upper else (-np.inf, np.inf))
+        self.joint_limits = np.array(limits, dtype=float)
+        self.effort_limits = np.array([info[10] for info in movable], dtype=float)
+        if not (self.effort_limits > 0).all():
+            bad = [n for n, e in zip(self.joint_names, self.effort_limits) if not e > 0]
+            raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
+                             f"(<limit effort=...>); the simulator needs one to clip commands")
+        self._ee_link = n_all - 1
+        self.joint_damping = np.array([info[6] for info in movable], dtype=float)
+        self.armature = self._armatures(urdf)
+        for link in range(-1, n_all):
+            p.changeDynamics(self._body, link, linearDamping=0.0, angularDamping=0.0,
+                             physicsClientId=cid)
+        for array in (self.joint_limits, self.effort_limits, self.joint_damping, self.armature):
+            array.setflags(write=False)
+        self._drives = self.control_mode == "torque" and (
+            (self.armature > 0).any() or (self.joint_damping > 0).any())
+        if self._drives:   # damping implicitly in _drive_torques instead (module docstring)
+            for joint in self._joints:
+                p.changeDynamics(self._body, joint, jointDamping=0.0, physicsClientId=cid)
+        if self.control_mode == "torque":
+            p.setJointMotorControlArray(self._body, self._joints, p.VELOCITY_CONTROL,
+                                        targetVelocities=[0.0] * self.n_joints,
+                                        forces=[0.0] * self.n_joints, physicsClientId=cid)
+
+    def _armatures(self, urdf):
+        """Armature per movable joint from the URDF's ``<lpa:armature>`` elements (default 0)."""
+        text = str(urdf)
+        if not text.lstrip().startswith("<"):
+            text = Path(text).read_text()
+        armatures = urdf_joint_armatures(text)
+        unknown = set(armatures) - set(self.joint_names)
+        if unknown:
+            raise ValueError(f"lpa:armature on joints {sorted(unknown)}, which are not movable "
+                             f"joints of the robot ({', '.join(self.joint_names)})")
+        return np.array([armatures.get(name, 0.0) for name in self.joint_names])
+
+    def _drive_torques(self, torques):
+        """τ' that makes pybullet's step follow (M + diag A) q̈ + h + D q̇⁺ = τ (module doc)."""
+        p, cid, body = self._p, self._client, self._body
+        states = p.getJointStates(body, self._joints, physicsClientId=cid)
+        q, qd = [s[0] for s in states], [s[1] for s in states]
+        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
+        bias = np.array(p.calculateInverseDynamics(body, q, qd, [0.0] * self.n_joints,
+                                                   physicsClientId=cid))
+        drive = np.diag(self.armature + self.joint_damping * self.physics_step)
+        accel = np.linalg.solve(mass + drive, torques - self.joint_damping * np.asarray(qd) - bias)
+        return mass @ accel + bias
+
+    @property
+    def n_joints(self):
+        return len(self._joints)
+
+    @property
+    def time(self):
+        return self._steps * self.physics_step
+
+    def _vector(self, values, name):
+        array = np.asarray(values, dtype=float)
+        if array.shape != (self.n_joints,):
+            raise ValueError(f"{name} must have {self.n_joints} values (joints "
+                             f"{', '.join(self.joint_names)}), got {array.size}")
+        if not np.isfinite(array).all():
+            raise ValueError(f"{name} contains NaN or infinite values: {array.tolist()}")
+        return array
+
+    # -- public API -------------------------------------------------------------------------
+    def reset(self, positions=None, keep_time=False):
+        """Put the joints at ``positions`` (default: zero clipped into the limits), at rest,
+        and the clock at 0 (unless ``keep_time``: then it runs on, so that the stamps of
+        what is published stay ordered); in position mode the motors then hold that pose."""
+        q = home_pose(self.joint_limits, positions, name="initial positions")
+        p, cid = self._p, self._client
+        for joint, value in zip(self._joints, q):
+            p.resetJointState(self._body, joint, float(value), 0.0, physicsClientId=cid)
+        self._steps = self._steps if keep_time else 0
+        self._efforts = np.zeros(self.n_joints)
+        if self.control_mode == "position":
+            self._position_motors(q)
+        return self.state()
+
+    def _position_motors(self, target):
+        self._p.setJointMotorControlArray(
+            self._body, self._joints, self._p.POSITION_CONTROL, targetPositions=target.tolist(),
+            forces=self.effort_limits.tolist(), positionGains=[self.position_gain] * self.n_joints,
+            velocityGains=[1.0] * self.n_joints, physicsClientId=self._client)
+
+    def step(self, command, n_substeps=1):
+        """Apply ``command`` (positions or torques, see module docstring), advance
+        ``n_substeps`` physics steps (0 counts as 1), return the new :class:`SimState`.
+
+        Raises ValueError for a command of the wrong length or with NaN/inf, before
+        touching the simulation.
+        """
+        command = self._vector(command, "command")
+        n_substeps = max(1, int(n_substeps))
+        p, cid, body, joints = self._p, self._client, self._body, self._joints
+        if self.control_mode == "position":
+            self._position_motors(np.clip(command, self.joint_limits[:, 0],
+                                          self.joint_limits[:, 1]))
+            for _ in range(n_substeps):
+                p.stepSimulation(physicsClientId=cid)
+            self._efforts = np.array([s[3] for s in p.getJointStates(body, joints,
+                                                                    physicsClientId=cid)])
+        else:
+            torques = np.clip(command, -self.effort_limits, self.effort_limits)
+            for _ in range(n_substeps):
+                applied = self._drive_torques(torques) if self._drives else torques
+                p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL,
+                                            forces=applied.tolist(), physicsClientId=cid)
+                p.stepSimulation(physicsClientId=cid)
+            self._efforts = torques
+        self._steps += n_substeps
+        return self.state()
+
+    def state(self):
+        """The current :class:`SimState` (read-only arrays)."""
+        p, cid = self._p, self._client
+        joint_states = p.getJointStates(self._body, self._joints, physicsClientId=cid)
+        ee = p.getLinkState(self._body, self._ee_link, computeForwardKinematics=True,
+                            physicsClientId=cid)[4]
+        arrays = [np.array([s[0] for s in joint_states]), np.array([s[1] for s in joint_states]),
+                  np.array(self._efforts, dtype=float), np.array(ee, dtype=float)]
+        for array in arrays:
+            array.setflags(write=False)
+        return SimState(self.time, *arrays)
+
+    def close(self):
+        """Disconnect the pybullet client (idempotent)."""
+        if getattr(self, "_client", None) is not None:
+            try:
+                self._p.disconnect(physicsClientId=self._client)
+            finally:
+                self._client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass

@@ -1,0 +1,120 @@
+"""A directory of fitted transfer models keyed by caller-chosen model ids (no rclpy).
+
+One mapping service serves many robot pairs, so each model is stored under an id such as
+``pincher->youbot``. A model lives in ``<directory>/<encoded id>.npz`` (the library's model
+file, see :mod:`lpa_transfer.transfer.model_io`). The file name is the id percent-encoded
+(``urllib.parse.quote`` with no safe characters, and ``.`` encoded too), so any id maps to a
+plain file name, the mapping is reversible (the id survives a restart with no index file to
+keep in step) and no model file starts with ``.`` like the library's temporary files.
+"""
+import urllib.parse
+from pathlib import Path
+
+import numpy as np
+
+from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
+from lpa_transfer.transfer.model_io import load_model
+from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+
+#: Transfer methods by the name a caller uses: one global map (PA) or local maps (LPA).
+METHODS = {"pa": ProcrustesAnalysis, "lpa": LocalProcrustesAnalysis}
+SUFFIX = ".npz"
+_MAX_FILE_NAME = 255
+
+
+def training_rmse(model, source, target):
+    """Root-mean-square Euclidean error of the model on its correspondences."""
+    error = model.transfer(source) - np.asarray(target, dtype=np.float64)
+    return float(np.sqrt((error ** 2).sum(axis=1).mean()))
+
+
+def method_of(model):
+    return next(name for name, cls in METHODS.items() if type(model) is cls)
+
+
+def method_class(method):
+    """The model class of ``method`` ("pa" or "lpa"); ValueError names the known methods."""
+    try:
+        return METHODS[method]
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown method {method!r}; known: {sorted(METHODS)}") from None
+
+
+def file_name(model_id):
+    """The model file name of ``model_id``; ValueError for ids that cannot name a model."""
+    if not isinstance(model_id, str) or not model_id:
+        raise ValueError("model id must be a non-empty string")
+    if any(ord(char) < 32 or ord(char) == 127 for char in model_id):
+        raise ValueError(f"model id {model_id!r} contains control characters")
+    name = urllib.parse.quote(model_id, safe="").replace(".", "%2E") + SUFFIX
+    if len(name.encode()) > _MAX_FILE_NAME:
+        raise ValueError(f"model id {model_id[:40]!r}... is too long for a file name")
+    return name
+
+
+def model_id_of(path):
+    return urllib.parse.unquote(Path(path).name[:-len(SUFFIX)])
+
+
+class ModelStore:
+    """Fitted PA/LPA models persisted in ``directory``, all reloaded on construction.
+
+    Files that cannot be read as models are skipped and listed in ``load_errors``.
+    """
+
+    def __init__(self, directory):
+        self.directory = Path(directory).expanduser()
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self._models, self.load_errors = {}, []
+        for path in sorted(self.directory.glob("*" + SUFFIX)):
+            if path.name.startswith("."):
+                continue                      # a temporary file left by a crash mid-save
+            try:
+                self._models[model_id_of(path)] = load_model(path)
+            except ValueError as exc:
+                self.load_errors.append(str(exc))
+
+    def path(self, model_id):
+        return self.directory / file_name(model_id)
+
+    def ids(self):
+        """The stored model ids, sorted."""
+        return sorted(self._models)
+
+    def get(self, model_id):
+        """The model stored under ``model_id``; ValueError names the known ids."""
+        try:
+            return self._models[model_id]
+        except KeyError:
+            raise ValueError(f"unknown model id {model_id!r}; known: {self.ids()}") from None
+
+    def fit(self, model_id, method, source, target, **hyperparameters):
+        """Fit a ``method`` model on the correspondences, save it under ``model_id`` (replacing
+        any model of that id) and return it."""
+        path = self.path(model_id)
+        cls = method_class(method)
+        unknown = sorted(set(hyperparameters) - set(cls().get_params()))
+        if unknown:
+            raise ValueError(f"method {method!r} has no hyperparameters {unknown}")
+        model = cls(**hyperparameters).fit(source, target)
+        model.save(path)
+        self._models[model_id] = model
+        return model
+
+    def transfer(self, model_id, source):
+        """Map source points through the model ``model_id``."""
+        return self.get(model_id).transfer(source)
+
+    def describe(self, model_id):
+        """Method, dimensions, number of local maps and correspondences, hyperparameters."""
+        model = self.get(model_id)
+        return dict(method=method_of(model), source_dim=int(model.n_features_in_),
+                    target_dim=int(model.n_features_out_),
+                    n_clusters=int(getattr(model, "n_clusters_", 1)),
+                    n_points=int(model.n_correspondences_), hyperparameters=model.get_params())
+
+    def delete(self, model_id):
+        """Forget the model ``model_id`` and remove its file."""
+        self.get(model_id)
+        self.path(model_id).unlink(missing_ok=True)
+        del self._models[model_id]

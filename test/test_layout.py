@@ -1,0 +1,124 @@
+"""The package's architecture, checked on the source: which subpackage may import which.
+
+The transfer core imports no robot or chapter code; the robot, learner, evaluation and
+recording layers import only the core and themselves; exploration builds on those; a thesis
+chapter may use everything below it but no other chapter; the library never imports rclpy or
+the nodes; nothing edits sys.path.
+"""
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+
+LIBRARY = ROOT / "lpa_transfer"
+CHAPTERS = {"lfd", "inverse_dynamics", "goal_babbling"}
+BASE = {"_validation"}
+# subpackage -> the lpa_transfer subpackages it may import (besides itself)
+ALLOWED = {
+    "_validation": set(),
+    "transfer": BASE,
+    "robots": BASE,
+    "learners": BASE,
+    "evaluation": BASE,
+    "recording": set(),
+    "exploration": BASE | {"robots", "learners"},
+    **{chapter: BASE | {"transfer", "robots", "learners", "evaluation", "recording",
+                        "exploration"} for chapter in CHAPTERS},
+}
+
+
+def imported_modules(path):
+    """Every module an ``import`` or ``from ... import`` in ``path`` names (nested ones too),
+    relative imports resolved against the file's package."""
+    package = path.relative_to(ROOT).with_suffix("").parts[:-1]
+    names = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names += [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package[:len(package) - node.level + 1]
+                base = ".".join(parent + ((base,) if base else ()))
+            names.append(base)
+            names += [f"{base}.{alias.name}" for alias in node.names]
+    return names
+
+
+def subpackage_of(module):
+    """'lpa_transfer.robots.kinematics' -> 'robots'; None outside the library or at its root."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "lpa_transfer" and len(parts) > 1 else None
+
+
+LIBRARY_FILES = sorted(LIBRARY.rglob("*.py"))
+
+
+@pytest.mark.parametrize("path", [p for p in LIBRARY_FILES if p.parent != LIBRARY
+                                  or p.name == "_validation.py"],
+                         ids=lambda p: str(p.relative_to(LIBRARY)))
+def test_each_subpackage_imports_only_the_layers_below_it(path):
+    own = path.relative_to(LIBRARY).parts[0].removesuffix(".py")
+    used = {subpackage_of(m) for m in imported_modules(path)} - {None, own}
+    # 'lpa_transfer.transfer.procrustes' names 'transfer'; a bare module of the root counts too
+    used = {u for u in used if (LIBRARY / u).is_dir() or (LIBRARY / f"{u}.py").exists()}
+    assert used <= ALLOWED[own], f"{path.relative_to(ROOT)} imports {sorted(used - ALLOWED[own])}"
+
+
+@pytest.mark.parametrize("path", LIBRARY_FILES, ids=lambda p: str(p.relative_to(LIBRARY)))
+def test_the_library_imports_neither_rclpy_nor_the_nodes(path):
+    roots = {m.split(".")[0] for m in imported_modules(path)}
+    assert not roots & {"rclpy", "lpa_transfer_nodes", "lpa_transfer_interfaces"}, path
+
+
+def test_importing_every_library_module_loads_no_rclpy():
+    code = ("import importlib, pkgutil, sys, lpa_transfer\n"
+            "for m in pkgutil.walk_packages(lpa_transfer.__path__, 'lpa_transfer.'):\n"
+            "    importlib.import_module(m.name)\n"
+            "print(sorted(k for k in sys.modules if k.split('.')[0] in "
+            "('rclpy', 'lpa_transfer_nodes')))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_nothing_edits_sys_path():
+    offenders = []
+    for path in ROOT.glob("**/*.py"):
+        if ".venv" in path.parts or "build" in path.parts:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Attribute) and node.attr == "path" \
+                    and isinstance(node.value, ast.Name) and node.value.id == "sys":
+                offenders.append(str(path.relative_to(ROOT)))
+    assert offenders == []
+
+
+def test_the_package_root_offers_the_transfer_models_and_lwpr():
+    from lpa_transfer import LWPR, LocalProcrustesAnalysis, ProcrustesAnalysis
+    from lpa_transfer.learners.lwpr import LWPR as FromLearners
+    assert LWPR is FromLearners
+    for model in (ProcrustesAnalysis, LocalProcrustesAnalysis):
+        assert callable(model.fit) and callable(model.transfer)
+
+
+def test_no_top_level_function_name_means_two_things_in_the_library():
+    """One name, one meaning: a public top-level function or class is defined once, except in
+    the chapters' parallel modules (each chapter's ``report.write_outputs`` writes its own
+    run's outputs)."""
+    seen = {}
+    for path in LIBRARY_FILES:
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, (ast.FunctionDef, ast.ClassDef)) \
+                    and not node.name.startswith("_"):
+                seen.setdefault(node.name, []).append(str(path.relative_to(LIBRARY)))
+    def parallel(where):
+        return len({Path(w).name for w in where}) == 1 \
+            and all(Path(w).parts[0] in CHAPTERS for w in where)
+
+    assert {name: where for name, where in seen.items()
+            if len(where) > 1 and not parallel(where)} == {}
