@@ -284,7 +284,7 @@ def test_box_around_the_home_end_effector():
 
 
 def test_robot_kinematics_of_a_serial_arm_is_its_3d_forward_kinematics():
-    from lpa_transfer.serial_chain import forward_kinematics
+    from lpa_transfer.robots.serial_chain import forward_kinematics
     youbot = robot("youbot_arm")
     k = robot_kinematics(youbot)
     q = np.array([[0.1, 0.2, -0.3, 0.4, 0.5]])

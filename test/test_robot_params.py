@@ -72,7 +72,7 @@ def assert_broken(tmp_path, text, old, new, message):
 
 
 def test_masses_and_effort_limits_are_optional_with_defaults(tmp_path):
-    from lpa_transfer.robot_params import DEFAULT_EFFORT_LIMIT, DEFAULT_LINK_MASS
+    from lpa_transfer.robots.params import DEFAULT_EFFORT_LIMIT, DEFAULT_LINK_MASS
 
     robot = load_robot_params(write(tmp_path, VALID.replace("length = 0.3",
                                                             "length = 0.3\nmass = 0.7")
@@ -137,7 +137,7 @@ def test_serial_file_fills_the_general_fields(tmp_path):
 
 def test_planar_file_is_the_planar_special_case(tmp_path):
     """Derived general fields: joints about z at the previous link's end, rods along x."""
-    from lpa_transfer.robot_params import DEFAULT_VELOCITY_LIMIT, ROD_AXIAL_SHARE
+    from lpa_transfer.robots.params import DEFAULT_VELOCITY_LIMIT, ROD_AXIAL_SHARE
 
     robot = load_robot_params(ROBOTS / "two_link_source.toml")
     assert robot.kind == "planar"
@@ -186,7 +186,7 @@ def test_planar_file_may_not_place_its_base(tmp_path):
 
 
 def test_direct_construction_checks_shapes():
-    from lpa_transfer.robot_params import RobotParams
+    from lpa_transfer.robots.params import RobotParams
 
     with pytest.raises(ValueError, match=r"joint_axes must have shape \(2, 3\)"):
         RobotParams("arm", [0.3, 0.2], [(0, 1), (0, 1)], "test", joint_axes=[[0, 0, 1]])
@@ -235,7 +235,7 @@ def test_bad_armature_or_damping_names_file_and_key(tmp_path, text, old, new, me
 
 
 def test_direct_construction_checks_armature_and_damping():
-    from lpa_transfer.robot_params import RobotParams
+    from lpa_transfer.robots.params import RobotParams
 
     args = ("arm", [0.3, 0.2], [(0, 1), (0, 1)], "test")
     assert RobotParams(*args, joint_armature=[0.1, 0.0]).joint_armature.tolist() == [0.1, 0.0]

@@ -139,7 +139,7 @@ def test_urdf_file_path_and_three_links(tmp_path):
 def test_serial_chain_files_run_in_the_simulator():
     """robot_urdf of a kind = "serial" file: the youBot tracks a pose in position mode, and
     the Pincher's torques are clipped to its 2.5 N·m (thesis §5.5.1)."""
-    from lpa_transfer.serial_chain import forward_kinematics
+    from lpa_transfer.robots.serial_chain import forward_kinematics
 
     robots = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
     youbot = load_robot_params(robots / "youbot_arm.toml")
@@ -162,7 +162,7 @@ GRAVITY = 9.81
 
 def pendulum(armature, damping):
     """A one-link planar arm (uniform rod 0.4 m, 1.6 kg) on a joint with the given drive."""
-    from lpa_transfer.robot_params import RobotParams
+    from lpa_transfer.robots.params import RobotParams
 
     return RobotParams("pendulum", [0.4], [(-3.0, 1.0)], "test", link_masses=[1.6],
                        effort_limits=[40.0], joint_armature=[armature], joint_damping=[damping])
@@ -207,7 +207,7 @@ def test_armature_adds_to_the_joint_space_inertia():
 
     import pybullet as p
 
-    from lpa_transfer.planar_chain import load_fixed_robot
+    from lpa_transfer.robots.planar_chain import load_fixed_robot
 
     youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
     q0, tau = np.array([0.3, 0.5, 0.8, 0.5, 0.2]), np.array([1.0, 2.0, -1.0, 0.5, 0.2])
@@ -240,7 +240,7 @@ def test_armature_adds_to_the_joint_space_inertia():
 
 
 def test_armature_is_read_from_a_urdf_file_and_checked(tmp_path):
-    from lpa_transfer.serial_chain import LPA_URDF_NAMESPACE
+    from lpa_transfer.robots.serial_chain import LPA_URDF_NAMESPACE
 
     youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
     path = tmp_path / "youbot.urdf"
@@ -265,7 +265,7 @@ def test_thesis_pid_at_100_hz_is_stable_on_the_youbot():
     of the periods saturated, 117 limit-to-limit flips, 207 mm mean error)."""
     import dataclasses
 
-    from lpa_transfer.serial_chain import forward_kinematics
+    from lpa_transfer.robots.serial_chain import forward_kinematics
 
     youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
     q_centre, q_step, dt = np.array([0.0, 0.5, 0.8, 0.5, 0.0]), np.array(

@@ -112,7 +112,7 @@ def test_the_lipschitz_bound_of_a_planar_arm_holds_for_the_target():
     links, rng = GB_TARGET_LINKS, np.random.default_rng(0)
     bound = chain_lipschitz(links)
     assert bound == pytest.approx(np.hypot(1.1, 0.4))
-    from lpa_transfer.kinematics import planar_forward_kinematics
+    from lpa_transfer.robots.kinematics import planar_forward_kinematics
     q = rng.uniform(-3, 3, (500, 2))
     step = rng.normal(0, 1e-4, (500, 2))
     ratio = np.linalg.norm(planar_forward_kinematics(q + step, links)
@@ -125,8 +125,8 @@ def test_the_lipschitz_bound_holds_for_a_serial_chain():
     """The youBot (5 joints, offsets in 3-D): finite-difference slopes of its forward
     kinematics stay below chain_lipschitz of its link offsets."""
     from conftest import ROOT
-    from lpa_transfer.robot_params import load_robot_params
-    from lpa_transfer.serial_chain import forward_kinematics
+    from lpa_transfer.robots.params import load_robot_params
+    from lpa_transfer.robots.serial_chain import forward_kinematics
     robot = load_robot_params(ROOT / "scenarios" / "robots" / "youbot_arm.toml")
     bound, rng = chain_lipschitz(robot.link_lengths), np.random.default_rng(1)
     q = rng.uniform(robot.joint_limits[:, 0], robot.joint_limits[:, 1], (2000, 5))

@@ -16,7 +16,7 @@ ROBOTS_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
 @lru_cache(maxsize=None)
 def robot(name):
     """The RobotParams of ``scenarios/robots/<name>.toml`` (e.g. "two_link_source")."""
-    from lpa_transfer.robot_params import load_robot_params
+    from lpa_transfer.robots.params import load_robot_params
 
     return load_robot_params(ROBOTS_DIR / f"{name}.toml")
 

@@ -101,7 +101,7 @@ class FeedForwardLearner:
 
 def regressors():
     """Online regressors by the name a configuration uses (the learner is a parameter)."""
-    from .lwpr import LWPR
+    from lpa_transfer.learners.lwpr import LWPR
     return {"lwpr": LWPR}
 
 

@@ -36,7 +36,7 @@ class SavableModel:
 
     def save(self, path):
         """Write the fitted model to ``path`` (see the module docstring for the format)."""
-        from ._validation import check_fitted
+        from lpa_transfer._validation import check_fitted
         check_fitted(self)
         entries = {
             "format": np.array(FORMAT),
