@@ -1,12 +1,15 @@
 # Entry points; everything goes through tools/ so that there is one set-up path.
-# Extra arguments: make test ARGS='-k procrustes -x'
+# Extra arguments: make test ARGS='-k procrustes -x'; make ch5 ARGS='--out runs/mine'
+# Durations (2 cores) are in README.md; every target writes into runs/<name>/.
 ARGS ?=
-.PHONY: setup demo test bench
+RUN = bash tools/setup.sh && bash
+PY = bash tools/setup.sh && bash -c 'source tools/env.sh && exec python "$$@"' python
+.PHONY: setup demo test bench ch3 ch3-graph ch4 ch5 ch5-seed0 ch6 ch6-nao-poppy
 
 setup:
 	bash tools/setup.sh
 
-demo:
+demo:        # a few minutes: chapter 5 in small over the node graph, into runs/demo/
 	bash tools/run_default.sh $(ARGS)
 
 test:
@@ -14,3 +17,24 @@ test:
 
 bench: setup
 	bash -c 'source tools/env.sh && exec python -m bench.bench_lpa "$$@"' bench $(ARGS)
+
+ch3:         # thesis Fig. 3-6 and 3-8 (library only), into runs/two_link_fk/
+	$(PY) scenarios/two_link_fk/run_two_link_fk.py $(ARGS)
+
+ch3-graph:   # thesis §3.6 over the node graph, into runs/two_link_graph/
+	$(RUN) scenarios/two_link_graph/run.sh $(ARGS)
+
+ch4:         # thesis §4.5 over the node graph, into runs/lfd/
+	$(RUN) scenarios/lfd/run.sh $(ARGS)
+
+ch5:         # thesis §5.5.3, 10 seeds over the node graph, into runs/inverse_dynamics/
+	$(RUN) scenarios/inverse_dynamics/run.sh $(ARGS)
+
+ch5-seed0:   # the same for seed 0 only
+	$(RUN) scenarios/inverse_dynamics/run.sh --override scenarios/inverse_dynamics/one_seed.yaml $(ARGS)
+
+ch6:         # thesis §6.5.1 (Table 6.1), 10 seeds, into runs/goal_babbling/
+	$(RUN) scenarios/goal_babbling/run.sh $(ARGS)
+
+ch6-nao-poppy:   # thesis §6.5.2 (Nao -> Poppy), 10 seeds, into runs/nao_poppy/
+	$(RUN) scenarios/goal_babbling/run.sh --config scenarios/goal_babbling/nao_poppy.yaml --out runs/nao_poppy $(ARGS)

@@ -187,8 +187,10 @@ def run_to_end(process, timeout=60):
     return process.stop()
 
 
-def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=()):
-    """Run ``<scenario_dir>/run.sh --config <config> [--override <file>]... --out <out>`` on
+def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=(),
+                 extra_args=()):
+    """Run ``<scenario_dir>/run.sh --config <config> [--override <file>]... --out <out>
+    [extra_args]`` on
     its own ROS domain (files relative to the scenario); the CompletedProcess (text output
     captured). Past ``timeout`` the script gets SIGTERM, which its trap turns into stopping
     every node in order (each runs in its own session, out of reach of a kill of the script
@@ -197,7 +199,8 @@ def run_scenario(scenario_dir, out, config="smoke.yaml", timeout=300, overrides=
     args = ["--config", str(Path(scenario_dir) / config)]
     for override in overrides:
         args += ["--override", str(Path(scenario_dir) / override)]
-    command = ["bash", str(Path(scenario_dir) / "run.sh"), *args, "--out", str(out)]
+    command = ["bash", str(Path(scenario_dir) / "run.sh"), *args, "--out", str(out),
+               *extra_args]
     with subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           text=True) as script:
         try:

@@ -130,3 +130,30 @@ def test_transfer_between_arms_with_5_and_2_joints(tmp_path):
         assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 8)
     models = sorted(p.name for p in (out / "models").iterdir())
     assert len(models) == 4
+
+
+def test_the_demo_shape_one_target_with_progress(smoke_run, tmp_path):
+    """What `make demo` runs (demo.yaml), at the smoke size: only the youBot is a target (the
+    Pincher learns from scratch to have experience to give), progress and the summary table
+    reach the terminal, and the curves repeat the full smoke run's (to a relative 1e-6)."""
+    override = tmp_path / "demo_like.yaml"
+    override.write_text("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
+                        "    conditions: [uninitialised, transfer-PA]\n")
+    out = tmp_path / "run"
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
+                          overrides=["smoke.yaml", str(override)], extra_args=["--progress"])
+    assert result.returncode == 0, result.stdout + result.stderr
+    shown = result.stdout + result.stderr
+    assert "seed 0 youbot star1 transfer-PA: trial 2/2 tracking error" in shown
+    assert "seed 0 pincher star1 from scratch: trial 1/2" in shown
+    assert "converged at trial" in shown and f"figure  {out}/fig5_7_5_8" in shown
+    curves = json.loads((out / "results.json").read_text())["curves_m"]
+    assert sorted(curves) == ["youbot/star1/transfer-PA", "youbot/star1/uninitialised"]
+    full = json.loads((smoke_run / "results.json").read_text())["curves_m"]
+    for key, runs in curves.items():
+        assert np.allclose(runs, full[key], rtol=1e-6, atol=0), key
+    assert sorted(p.name for p in (out / "models").iterdir()) == \
+        sorted(p.name for p in (smoke_run / "models").iterdir() if "pincher-" in p.name
+               and "pa" in p.name and "lpa" not in p.name)
+    report = (out / "report.txt").read_text()
+    assert "pincher as target" not in report and "youbot as target" in report

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Set up (quick when nothing changed), then run the default scenario: thesis chapter 5, online
-# inverse-dynamics learning of two 'star' tasks by a youBot and a Pincher arm with and without
-# transfer, over the ROS 2 node graph, for babbling seed 0 (one_seed.yaml; drop that override
-# for all 10 seeds). Writes into runs/inverse_dynamics/; extra args (--config FILE,
-# --override FILE, --out DIR) go to the scenario script.
+# `make demo`: set up (quick when nothing changed), then the default demo over the ROS 2 node
+# graph: the youBot learns a star tracking task (thesis ch. 5) from scratch and with the
+# Pincher's experience transferred through the mapping service (scenarios/inverse_dynamics/
+# demo.yaml on config.yaml). Progress and a summary table in the terminal; figure, report and
+# bag in runs/demo/. Extra args (--override FILE, --out DIR) go to the scenario script.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$ROOT/tools/setup.sh"
-exec bash "$ROOT/scenarios/inverse_dynamics/run.sh" \
-    --override "$ROOT/scenarios/inverse_dynamics/one_seed.yaml" "$@"
+exec bash "$ROOT/scenarios/inverse_dynamics/run.sh" --progress \
+    --override "$ROOT/scenarios/inverse_dynamics/demo.yaml" --out "$ROOT/runs/demo" "$@"

@@ -251,3 +251,20 @@ def check_start_noise(key, by_seed, start_noise):
                 raise ValueError(f"{key}: seeds {a} and {b} learn from scratch "
                                  f"{'alike' if same else 'differently'}, which runs with "
                                  f"start_noise {start_noise:g} cannot ({cause})")
+
+
+def summary_lines(curves, experiment):
+    """A short table for the terminal: per target, star and condition the tracking error of
+    the first and the last trial (mean over seeds) and the trial from which the mean error
+    stays within the convergence tolerance of learning from scratch's final error."""
+    rows, _ = convergence_table(curves, experiment.robots, experiment.stars,
+                                experiment.tolerance, experiment.babbling_seconds)
+    lines = [f"{'target':<9} {'star':<6} {'condition':<16} {'trial 1 (mm)':>12} "
+             f"{'last trial (mm)':>15} {'converged at trial':>18}"]
+    for robot, star, condition, k, n in rows:
+        mean = 1e3 * np.mean(curves[f"{robot}/{star}/{condition}"], axis=0)
+        lines.append(f"{robot:<9} {star:<6} {condition:<16} {mean[0]:>12.2f} {mean[-1]:>15.2f} "
+                     f"{k if k <= n else f'> {n}':>18}")
+    lines.append(f"(converged: the mean error stays within {experiment.tolerance:.0%} of "
+                 f"learning from scratch's final error; {len(experiment.done_seeds)} seed(s))")
+    return lines

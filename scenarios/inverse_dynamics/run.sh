@@ -7,7 +7,7 @@
 # everything is recorded. The robots and stars are the experiment node's parameters.
 #
 # Usage: scenarios/inverse_dynamics/run.sh [--config FILE.yaml] [--override FILE.yaml]...
-#                                          [--out DIR]
+#                                          [--out DIR] [--progress]
 #   defaults: scenarios/inverse_dynamics/config.yaml, runs/inverse_dynamics; an override file
 #   changes some parameters (e.g. experiment seeds: [3, 4] to run a share of the seeds;
 #   merge_results.py joins the shares' results).
@@ -52,4 +52,12 @@ stop_all
 WALL=$(python -c "import time; print(f'{time.time() - $START:.0f}')")
 python -m lpa_transfer.recording.bag "$OUT/run.mcap" >>"$OUT/report.txt"
 echo "whole run (nodes' start-up included): $WALL s of wall time" >>"$OUT/report.txt"
-cat "$OUT/report.txt"; echo "run directory: $OUT" >&2
+if [ $PROGRESS = 1 ]; then   # the summary table went by; say where everything is
+    echo "done in $WALL s. Written to $OUT:"
+    echo "  figure  $OUT/fig5_7_5_8_learning_curves.png"
+    echo "  report  $OUT/report.txt"
+    echo "  bag     $OUT/run.mcap   (python -m lpa_transfer.recording.bag $OUT/run.mcap)"
+    echo "  models  $OUT/models/   logs  $OUT/logs/"
+else
+    cat "$OUT/report.txt"; echo "run directory: $OUT" >&2
+fi

@@ -40,6 +40,7 @@ Writes into ``output_dir``: ``results.json`` (every curve), ``learning_curves.cs
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import matplotlib
 matplotlib.use("Agg")
@@ -49,7 +50,8 @@ from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.exploration.correspondences import load_correspondences  # noqa: E402
 from lpa_transfer.inverse_dynamics.analysis import CONDITIONS  # noqa: E402
-from lpa_transfer.inverse_dynamics.report import write_outputs  # noqa: E402
+from lpa_transfer.inverse_dynamics.report import (SETTINGS, summary_lines,  # noqa: E402
+                                                  write_outputs)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
@@ -67,6 +69,10 @@ class Experiment(Node):
         files = list(declare("robot_files", [""]))
         self.n_joints = {robot: load_robot_params(path).n_joints
                          for robot, path in zip(self.robots, files)}
+        self.targets = list(declare("targets", self.robots))   # which robots learn with transfer
+        if not self.targets or set(self.targets) - set(self.robots):
+            raise ValueError(f"targets must name some of the robots {self.robots}, got "
+                             f"{self.targets}")
         self.stars = list(declare("stars", ["star1", "star2"]))
         self.seeds = list(declare("seeds", [0]))
         self.conditions = list(declare("conditions", list(CONDITIONS)))
@@ -94,10 +100,13 @@ class Experiment(Node):
             self.create_subscription(TrialResult, f"/{robot}/trial_result", self.on_trial, 50)
         self.recording = None
         self.done_seeds = []
+        self.current = ""
 
     def on_trial(self, msg):
         if self.recording is not None:
             self.recording.append(msg)
+            print(f"  {self.current}: trial {msg.trial}/{self.n_trials} tracking error "
+                  f"{1e3 * msg.tracking_error:.2f} mm", flush=True)
 
     # -- one learner run --------------------------------------------------------------------
     def learn(self, robot, star, initial_data, start_offset=()):
@@ -121,10 +130,13 @@ class Experiment(Node):
                            source=to_matrix(points))
         return from_matrix(answer.target, "target")
 
-    def fit_models(self, seed, pairs):
-        """PA and LPA in both directions; model ids like 'youbot->pincher/lpa/seed0'."""
+    def fit_models(self, seed, pairs, methods):
+        """PA and/or LPA (``methods``) towards every target robot; model ids like
+        'youbot->pincher/lpa/seed0'."""
         for source, target in (self.robots, self.robots[::-1]):
-            for method in ("pa", "lpa"):
+            if target not in self.targets:
+                continue
+            for method in methods:
                 model_id = f"{source}->{target}/{method}/seed{seed}"
                 fields = dict(latent_dim=self.fit["latent_dim"], random_state=seed)
                 if method == "lpa":
@@ -140,7 +152,7 @@ class Experiment(Node):
                            for r in self.robots for s in self.stars]
                           + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop)
         run = [c for c in CONDITIONS if c == "uninitialised" or c in self.conditions]
-        curves = {f"{r}/{s}/{c}": [] for r in self.robots for s in self.stars for c in run}
+        curves = {f"{r}/{s}/{c}": [] for r in self.targets for s in self.stars for c in run}
         tasks = [(robot, star) for robot in self.robots for star in self.stars]
         scratch = {}
         per_seed = len(pair_files) // len(self.seeds)
@@ -153,8 +165,10 @@ class Experiment(Node):
                      for path in pair_files[index * per_seed:(index + 1) * per_seed]]
             pairs = {robot: np.vstack([side[k] for side in sides])
                      for k, robot in enumerate(self.robots)}
-            self.fit_models(seed, pairs)
-            for target in self.robots:
+            methods = [m for m in ("pa", "lpa") if any(c.endswith(f"transfer-{m.upper()}")
+                                                         for c in run)]
+            self.fit_models(seed, pairs, methods)
+            for target in self.targets:
                 source = next(r for r in self.robots if r != target)
                 for star in self.stars:
                     data = {"random": pairs[target]}
@@ -169,6 +183,7 @@ class Experiment(Node):
                             (transferred, pairs[target]))
                     for condition in run[1:]:
                         initial = data[condition]
+                        self.current = f"seed {seed} {target} {star} {condition}"
                         errors, _, _ = self.learn(target, star, initial,
                                                   offsets[target, star])
                         curves[f"{target}/{star}/{condition}"].append(errors)
@@ -176,9 +191,19 @@ class Experiment(Node):
                                                f"{_mm(errors)}")
             self.done_seeds.append(seed)
             for robot, star in tasks:
-                curves[f"{robot}/{star}/uninitialised"].append(scratch[robot, star][0])
-            write_outputs(curves, self.traces, self, self.output_dir)   # results so far
+                if robot in self.targets:
+                    curves[f"{robot}/{star}/uninitialised"].append(scratch[robot, star][0])
+            write_outputs(curves, self.traces, self.reported(), self.output_dir)   # so far
         return curves
+
+    def reported(self):
+        """The settings the outputs describe: the target robots only (a source that only
+        gives its experience has no conditions of its own to report)."""
+        if self.targets == self.robots:
+            return self
+        return SimpleNamespace(**{key: getattr(self, key) for key in SETTINGS
+                                  if key != "robots"},
+                               robots=self.targets, done_seeds=self.done_seeds)
 
     def start_offset(self, seed, robot, star):
         """The seed's joint offsets of the start pose (empty with ``start_noise`` 0)."""
@@ -191,6 +216,7 @@ class Experiment(Node):
         """Learning from scratch: (errors, its first ``n_source_trials`` trials' experience);
         the traces of the first seed's run are kept for Fig. 5-6."""
         empty = np.zeros((0, 4 * self.n_joints[robot]))
+        self.current = f"seed {seed} {robot} {star} from scratch"
         errors, experience, messages = self.learn(robot, star, empty, offset)
         self.traces.setdefault((robot, star), [_trace(messages[0]), _trace(messages[-1])])
         self.get_logger().info(f"seed {seed} {robot} {star} from scratch: {_mm(errors)}")
@@ -222,10 +248,10 @@ def main(args=None):
 
     node, curves = run_job("experiment", Experiment, experiment,
                            [a for a in argv if not a.endswith(".npz")])
-    text = write_outputs(curves, node.traces, node, node.output_dir)
+    text = write_outputs(curves, node.traces, node.reported(), node.output_dir)
     text += f"\nexperiment wall time {time.perf_counter() - start:.0f} s\n"
     (node.output_dir / "report.txt").write_text(text)
-    print(text, end="")
+    print("\n".join(summary_lines(curves, node.reported())), flush=True)
     return 0
 
 

@@ -3,13 +3,14 @@
 # starting/stopping every node as its own process with its own log.
 # Sets PARAMS (--ros-args --params-file CONFIG [--params-file OVERRIDE]...) and CONFIGS (the
 # files in that order: later ones override); provides experiment_list, start, step, stop_all.
-OVERRIDES=()
+OVERRIDES=() PROGRESS=0
 while [ $# -gt 0 ]; do
     case $1 in
+        --progress) PROGRESS=1; shift ;;
         --config) CONFIG=$(realpath "$2"); shift 2 ;;
         --override) OVERRIDES+=("$(realpath "$2")"); shift 2 ;;
         --out) OUT=$(realpath -m "$2"); shift 2 ;;
-        *) echo "usage: $0 [--config FILE.yaml] [--override FILE.yaml]... [--out DIR]" >&2
+        *) echo "usage: $0 [--config FILE.yaml] [--override FILE.yaml]... [--out DIR] [--progress]" >&2
            exit 2 ;;
     esac
 done
@@ -22,6 +23,8 @@ fi
 rm -rf "$OUT"; mkdir -p "$OUT/logs"; touch "$OUT/.${SCENARIO}_run"
 source "$ROOT/tools/env.sh"
 export ROS_LOG_DIR=$OUT/logs/ros PYTHONUNBUFFERED=1
+# --progress: every step's output also goes to the terminal, log lines as '[node] message'.
+if [ $PROGRESS = 1 ]; then export RCUTILS_CONSOLE_OUTPUT_FORMAT=${RCUTILS_CONSOLE_OUTPUT_FORMAT:-"[{name}] {message}"}; fi
 cd "$ROOT"
 PARAMS=(--ros-args)
 for file in "${CONFIGS[@]}"; do PARAMS+=(--params-file "$file"); done
@@ -69,7 +72,11 @@ trap 'echo "interrupted: stopping the nodes" >&2; stop_all; exit 130' INT TERM
 step() {   # step NAME COMMAND...: one step with its own log, waited for (so Ctrl-C interrupts it)
     local name=$1; shift
     echo "[$(date +%T)] $name" >&2
-    setsid "$@" >"$OUT/logs/$name.log" 2>&1 &
+    if [ $PROGRESS = 1 ]; then
+        setsid "$@" > >(tee "$OUT/logs/$name.log") 2>&1 &
+    else
+        setsid "$@" >"$OUT/logs/$name.log" 2>&1 &
+    fi
     CURRENT=$! CURRENT_NAME=$name
     local code=0; wait "$CURRENT" || code=$?
     CURRENT=""
