@@ -15,7 +15,7 @@ import pytest
 from conftest import ROOT
 
 LIBRARY = ROOT / "lpa_transfer"
-CHAPTERS = {"lfd", "inverse_dynamics", "goal_babbling"}
+CHAPTERS = {"illustrative_example", "lfd", "inverse_dynamics", "goal_babbling"}
 BASE = {"_validation"}
 # subpackage -> the lpa_transfer subpackages it may import (besides itself)
 ALLOWED = {
