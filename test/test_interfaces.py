@@ -56,3 +56,16 @@ def test_every_field_is_documented(path):
             assert previous.startswith("#"), f"{path.name}: undocumented field {line!r}"
         previous = line
     assert re.search(r"^\w", path.read_text(), re.M), "no fields"
+
+
+def test_matrix_from_rows():
+    import array
+
+    import numpy as np
+
+    from lpa_transfer_nodes._ros_util import matrix_from_rows
+    values = array.array("d", [1, 2, 3, 4, 5, 6])
+    assert np.array_equal(matrix_from_rows(2, 3, values, "source"), [[1, 2, 3], [4, 5, 6]])
+    assert matrix_from_rows(3, 2, [1, 2, 3, 4, 5, 6], "source").shape == (3, 2)
+    with pytest.raises(ValueError, match=r"source: rows\*cols = 2\*2 = 4 does not match the 6"):
+        matrix_from_rows(2, 2, values, "source")

@@ -1,11 +1,10 @@
 """ModelStore: models keyed by id, persisted to a directory and reloaded bit for bit."""
-import array
 
 import numpy as np
 import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.transfer.model_store import ModelStore, file_name, matrix_from_rows, training_rmse
+from lpa_transfer.transfer.model_store import ModelStore, file_name, training_rmse
 from two_link import correspondences
 
 ID = "pincher->youbot/left arm"
@@ -112,11 +111,3 @@ def test_unreadable_files_are_skipped(tmp_path, data):
     store = ModelStore(tmp_path)
     assert store.ids() == [ID]
     assert len(store.load_errors) == 1 and "junk.npz" in store.load_errors[0]
-
-
-def test_matrix_from_rows():
-    values = array.array("d", [1, 2, 3, 4, 5, 6])
-    assert np.array_equal(matrix_from_rows(2, 3, values, "source"), [[1, 2, 3], [4, 5, 6]])
-    assert matrix_from_rows(3, 2, [1, 2, 3, 4, 5, 6], "source").shape == (3, 2)
-    with pytest.raises(ValueError, match=r"source: rows\*cols = 2\*2 = 4 does not match the 6"):
-        matrix_from_rows(2, 2, values, "source")
