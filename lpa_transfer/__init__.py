@@ -1,5 +1,5 @@
 """lpa_transfer: transfer learning between differently built robots with (Local) Procrustes
-Analysis — the pure library (it never imports rclpy; the ROS 2 nodes are ``lpa_transfer_nodes``).
+Analysis — the pure library (the ROS 2 nodes are ``lpa_transfer_nodes``).
 
 Thesis: Makondo, "Accelerating robot learning of motor skills with knowledge transfer".
 Models follow scikit-learn conventions: constructor arguments are hyperparameters,

@@ -1,6 +1,6 @@
 """Reading learning curves: when does a learner reach a level, how much time does transfer
 save (thesis §6.5: "the time it takes for the target robot to learn from scratch and the time
-it takes to learn when provided with additional knowledge"; no rclpy).
+it takes to learn when provided with additional knowledge").
 
 A curve is sampled at increasing ``times`` (s of the learner's clock). The thesis reads its
 Fig. 6-10 this way: Poppy alone reaches a reaching rate of 0.81 after 5000 s, with transfer

@@ -1,4 +1,4 @@
-"""Motor babbling programs: seeded random straight lines in joint or task space (no rclpy).
+"""Motor babbling programs: seeded random straight lines in joint or task space.
 
 The thesis collects correspondences by driving robots through the same random exploration:
 joint-space positions (§3.6), straight task-space segments tracked by both robots (§5.4.1),

@@ -1,4 +1,4 @@
-"""Correspondences between two robots collected by babbling, and their files (no rclpy).
+"""Correspondences between two robots collected by babbling, and their files.
 
 A correspondence pairs a source-robot point with a target-robot point (thesis ch. 3, §3.1).
 The collector drives both robots (anything with ``step(command, n_steps) -> state``, the

@@ -1,5 +1,4 @@
-"""Guided exploration: correspondences for transferring sensorimotor data (thesis §6.4, Alg. 7;
-no rclpy).
+"""Guided exploration: correspondences for transferring sensorimotor data (thesis §6.4, Alg. 7).
 
 The source robot Ω_s and the target robot Ω_t share d_c ≤ min(d_s, d_t) joints (the motor
 subspace Q̄, e.g. Nao's and Poppy's four common arm joints, §6.5.2). The target explores for

@@ -1,6 +1,6 @@
 """Experiment 1 of thesis §6.5.1 (Table 6.1): goal babbling of a 2-link target arm from scratch
 or after guided exploration and transfer from a 2-link source arm, with and without the guard
-against negative transfer (no rclpy). :func:`run_condition` runs one condition and seed.
+against negative transfer. :func:`run_condition` runs one condition and seed.
 """
 from dataclasses import dataclass
 from functools import lru_cache

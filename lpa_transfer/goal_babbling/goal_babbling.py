@@ -1,4 +1,4 @@
-"""Online goal babbling (thesis ch. 6, §6.3.1, Alg. 6; Rolf, Steil & Gienger 2010/2011; no rclpy).
+"""Online goal babbling (thesis ch. 6, §6.3.1, Alg. 6; Rolf, Steil & Gienger 2010/2011).
 
 As in explauto, three separate objects meet here: the environment (the robot, a
 :class:`lpa_transfer.robots.kinematics.Kinematics`: joint limits, home posture, and ``forward(Q) -> X``,

@@ -1,5 +1,4 @@
-"""A guard against negative transfer for goal-babbling sensorimotor models (thesis §6.6, ch. 7;
-no rclpy).
+"""A guard against negative transfer for goal-babbling sensorimotor models (thesis §6.6, ch. 7).
 
 The thesis adds transferred samples to its k-NN model with the weight of own data and observes
 negative transfer (§6.5.1: with PA, and with LPA fitted on little data); §6.6 traces it to

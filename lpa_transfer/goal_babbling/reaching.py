@@ -1,4 +1,4 @@
-"""Reaching evaluation of a learned inverse model (thesis §6.5; no rclpy).
+"""Reaching evaluation of a learned inverse model (thesis §6.5).
 
 The thesis tests the learned L⁻¹ at evenly spaced times "on some test data evenly distributed
 in the target robot's task space" with two measures: the average error of reaching all test

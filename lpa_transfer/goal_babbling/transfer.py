@@ -1,4 +1,4 @@
-"""Transfer of goal-babbling experience between robots (thesis ch. 6, §6.4-§6.5; no rclpy).
+"""Transfer of goal-babbling experience between robots (thesis ch. 6, §6.4-§6.5).
 
 The pipeline of §6.4 (Fig. 6-3): guided exploration (Alg. 7,
 :mod:`lpa_transfer.exploration.guided`) gives correspondences (q̄, x_s) ~ (q̄, x_t); a domain

@@ -1,4 +1,4 @@
-"""Online inverse-dynamics learning for tracking control (thesis ch. 5, §5.3; no rclpy).
+"""Online inverse-dynamics learning for tracking control (thesis ch. 5, §5.3).
 
 :class:`FeedForwardLearner` is the loop of Fig. 5-1 and Fig. 5-2: at every control period it
 predicts the feed-forward torque τ_ff = f(q_d, q̇_d, q̈_d) with its online regressor, adds the

@@ -1,7 +1,8 @@
 """Regression models the robots learn with, e.g. forward kinematics in the §3.6 example.
 
 The thesis learns its models with LWPR (Locally Weighted Projection Regression [146]; §3.6,
-§5). LWPR is not installable here, so :class:`LocallyWeightedRegression` stands in for it: a
+§5). Chapter 5's online learner is the package's LWPR (:class:`lpa_transfer.learners.lwpr.LWPR`);
+the §3.6 example (scenarios/two_link_fk) uses :class:`LocallyWeightedRegression` in its place: a
 memory-based locally weighted affine regression. It is a different learner from LWPR (no
 incremental receptive fields, no projection regression); on noise-free 2-link kinematics it
 is markedly more accurate than the LWPR ground truth the thesis reports (RMSE 0.0061 m).

@@ -1,4 +1,4 @@
-"""Sensorimotor models of a learning robot (thesis ch. 6, §6.3 and §6.3.2; no rclpy).
+"""Sensorimotor models of a learning robot (thesis ch. 6, §6.3 and §6.3.2).
 
 The forward model L(q) = x predicts where a joint command q puts the end effector; the inverse
 model L⁻¹(x) = q predicts the command that reaches a task point x (§6.3). The thesis learns

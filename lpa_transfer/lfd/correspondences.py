@@ -1,5 +1,5 @@
 """Correspondences between a demonstrator and a robot learner for goal-directed imitation
-(thesis §4.4.2-4.5; no rclpy).
+(thesis §4.4.2-4.5).
 
 Two poses correspond when they put the end effectors at the *same* task point, the
 demonstrator's point seen through the task frame T_R^H (§4.4.2, Fig. 4-5):
@@ -220,10 +220,9 @@ def babbling_limits(robot, demonstrator, joint_map, babble_range="shared"):
     Why "shared" is our default: the redundancy resolution starts the demonstrator's IK at
     the joint-mapped robot pose, clipped into the demonstrator's limits. Where the robot's
     range is wider, clipping breaks that start's continuity and neighbouring robot poses get
-    far-apart demonstrator poses. Measured on the PR2, whose upper-arm roll spans 4.7 rad
-    against the human's 2.8: 6000 babbled poses of the full box gave held-out LPA mapping
-    errors of 166 mm (mean), the shared box 26 mm; the Meka's box lies almost inside the
-    shared one.
+    far-apart demonstrator poses. On the PR2, whose upper-arm roll spans 4.7 rad against the
+    human's 2.8, babbling the full box gives held-out LPA mapping errors several times those
+    of the shared box (bench/README.md); the Meka's box lies almost inside the shared one.
     """
     if babble_range not in BABBLE_RANGES:
         raise ValueError(f"babble_range must be one of {BABBLE_RANGES}, got {babble_range!r}")

@@ -1,5 +1,5 @@
 """Chapter 4's experiments in process: demonstrations of letters, their transfer from the
-demonstrator to a robot by LPA, and the mapping error (thesis §4.5, §4.5.1; no rclpy).
+demonstrator to a robot by LPA, and the mapping error (thesis §4.5, §4.5.1).
 
 * The scenario (:func:`load_setup`): the demonstrator's and the robots' parameter files, each
   robot's joint map (Table 4.2) and task frame T_R^H, as scenarios/lfd/frames.yaml holds them.

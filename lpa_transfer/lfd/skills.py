@@ -1,5 +1,5 @@
 """Skills from transferred demonstrations, and transfer between robots (thesis §4.4.4-4.4.5,
-§4.5.2-4.5.3; no rclpy).
+§4.5.2-4.5.3).
 
 * Accuracy sweep (:func:`accuracy_sweep`, Fig. 4-10 and 4-12): LPA fitted on a growing
   number of correspondences for several N_min; every demonstration transferred point by

@@ -7,9 +7,9 @@ holding the complete definition text (the type's ``.msg`` followed by every nest
 ``.msg``, each after an 80-``=`` line and ``MSG: pkg/msg/Type``); one channel per topic with
 message encoding ``cdr`` and the metadata ``offered_qos_profiles`` (YAML) and ``topic_type_hash``.
 
-Message payloads are serialized CDR bytes exactly as received from the middleware; this module
-never imports rclpy. Definitions are read from the installed ``share/<pkg>/msg/*.msg`` files
-found on ``AMENT_PREFIX_PATH`` (falling back to this interpreter's prefix).
+Message payloads are serialized CDR bytes exactly as received from the middleware. Definitions
+are read from the installed ``share/<pkg>/msg/*.msg`` files found on ``AMENT_PREFIX_PATH``
+(falling back to this interpreter's prefix).
 """
 import functools
 import os

@@ -1,4 +1,4 @@
-"""Torque control for tracking: PID feedback plus a learned feed-forward term (no rclpy).
+"""Torque control for tracking: PID feedback plus a learned feed-forward term.
 
 Thesis ch. 5 (§5.3, Fig. 5-1): the commanded torque is
 

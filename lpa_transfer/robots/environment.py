@@ -1,4 +1,4 @@
-"""A simulated or real robot behind the environment interface of goal babbling (no rclpy).
+"""A simulated or real robot behind the environment interface of goal babbling.
 
 :mod:`lpa_transfer.goal_babbling.goal_babbling` (like explauto) separates the environment from the
 sensorimotor model and the exploration strategy; the environment is a

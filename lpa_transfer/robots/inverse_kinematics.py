@@ -1,4 +1,4 @@
-"""Numerical inverse kinematics by damped least squares (no rclpy).
+"""Numerical inverse kinematics by damped least squares.
 
 Task-space babbling (thesis §5.4.1: both robots track the same straight task-space lines) and
 task-point pairing (§4.4.2: the demonstrator reaches the point the robot reached) need each
@@ -94,7 +94,8 @@ def solve_many(forward, x_targets, q_starts, joint_limits, damping=0.01, toleran
     ends where :func:`solve` does, up to rounding (batched linear algebra rounds
     differently); a row that cannot converge (an unreachable target) runs to
     ``max_iterations`` through halvings and nudges that rounding can send to another nearby
-    stalled pose (measured on the PR2's babbled points: residuals up to 5 mm apart there).
+    stalled pose (on the PR2's unreachable babbled points the residuals of the two can differ
+    by millimetres, bench/README.md).
     """
     limits = np.asarray(joint_limits, dtype=np.float64)
     targets = np.atleast_2d(np.asarray(x_targets, dtype=np.float64))

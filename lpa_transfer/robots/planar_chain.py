@@ -10,7 +10,7 @@ The model: an n-link chain whose revolute joints all turn about z, each link a t
 rod along its local x axis (mass m, centre of mass at L/2, inertia m L²/12 about y and z;
 the axial inertia is set to a negligible 1e-6·m L²). The chain moves in the vertical x-y
 plane with gravity −9.81 m/s² along −y, so gravity matters: for one link
-τ = m g (L/2) cos q + (m L²/3) q̈. Pure pybullet + numpy (no rclpy).
+τ = m g (L/2) cos q + (m L²/3) q̈. Pure pybullet + numpy.
 """
 import os
 import tempfile

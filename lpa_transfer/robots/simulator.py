@@ -1,4 +1,4 @@
-"""A robot dynamics simulator on pybullet, for the robot_sim node (no rclpy).
+"""A robot dynamics simulator on pybullet, for the robot_sim node.
 
 :class:`RobotSimulator` wraps one pybullet DIRECT client (its own client id, passed to every
 call, so several simulators in one process never interfere) and one fixed-base robot loaded
@@ -23,11 +23,10 @@ Joint drives (:mod:`lpa_transfer.robots.params`, "Drive"):
 
 * viscous damping D, URDF ``<dynamics damping=D>`` (``joint_damping``): pybullet applies
   τ = −D·q̇ itself in every control mode, explicitly, from the velocity at the start of the
-  physics step — measured: a free joint at q̇ = 2 rad/s with D = 0.5 N·m·s/rad and 0.05 kg·m²
-  loses 0.02 rad/s per 1 ms step, without damping none. Explicit damping diverges once
+  physics step (checked on a free joint, bench/README.md). Explicit damping diverges once
   D·dt > 2·(the joint's inertia): the youBot's wrist roll (7e-5 kg·m², D = 1) without its
-  armature ran away to pybullet's 100 rad/s clamp within 10 ms. So in torque mode the
-  simulator switches pybullet's damping off and applies it itself, implicitly (below);
+  armature runs away to pybullet's 100 rad/s clamp. So in torque mode the simulator switches
+  pybullet's damping off and applies it itself, implicitly (below);
   position mode keeps pybullet's (its motor constraints hold the joints);
 * armature A (``<lpa:armature>``, :func:`lpa_transfer.robots.serial_chain.urdf_joint_armatures`;
   ``armature``): pybullet has no armature parameter. In torque mode, when a joint has an
@@ -45,11 +44,10 @@ Joint drives (:mod:`lpa_transfer.robots.params`, "Drive"):
   joint axis to the child link's inertia in the URDF, was measured and rejected: I + A·aaᵀ
   breaks the rigid-body triangle inequality, and pybullet then sets the link's inertia to
   zero; a disc-shaped addition (A about the axis, A/2 across it) loads, but pybullet then
-  also adds A to every joint before it with a parallel axis and to the coupling terms
-  (youBot file at q = (0, 0.5, 0.8, 0.5, 0): M_11 grew by 0.47 instead of 0.23 kg·m², M_22 by
-  0.48 instead of 0.33, M_23 by 0.15 instead of 0). Joint-limit and contact impulses still
-  see M alone. The reported efforts are the commanded (clipped) τ. Position mode uses
-  pybullet's motor constraints, which do not see the armature (damping still applies there).
+  also adds A to every joint before it with a parallel axis and to the coupling terms (on the
+  youBot file, bench/README.md). Joint-limit and contact impulses still see M alone. The
+  reported efforts are the commanded (clipped) τ. Position mode uses pybullet's motor
+  constraints, which do not see the armature (damping still applies there).
 """
 from dataclasses import dataclass
 from pathlib import Path
@@ -89,10 +87,10 @@ def elapsed(state, previous):
     """Simulated seconds from ``previous`` to ``state``, rounded to 1 ns.
 
     Clock readings are step counts times the step length; the float difference of two of them
-    carries a rounding error that grows with the time run (at 57,600 ms steps it changed a
-    sample's 9th digit), so without the rounding the same seed gives other samples depending
-    on how long the simulator ran before. Every difference of two clock readings goes through
-    here (acceleration samples, the PID servo's command velocity).
+    carries a rounding error that grows with the time run, so without the rounding the same
+    seed gives other samples depending on how long the simulator ran before (bench/README.md).
+    Every difference of two clock readings goes through here (acceleration samples, the PID
+    servo's command velocity).
     """
     return round(state.time - previous.time, 9)
 
@@ -107,9 +105,8 @@ class RobotSimulator:
 
     ``position_gain`` is the position motors' gain (pybullet's ``positionGains``: the share of
     the position error the motor constraint removes per step; velocity gain 1). pybullet's
-    default 0.1 lets an arm whose effort limit saturates fall into a limit cycle: measured on
-    the §3.6 target arm (1 ms steps), joint 1 still swung ±3 rad/s at ±20 N·m one second after
-    6 of 100 random targets. At 0.05 all 100 settled within 1e-4 rad.
+    default 0.1 lets an arm whose effort limit saturates fall into a limit cycle (the §3.6
+    target arm did after some random targets); at 0.05 it settles (bench/README.md).
 
     ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
     (module docstring); the armature acts in torque mode.

@@ -81,7 +81,7 @@ class Responsibilities:
             peak = weighted.max(axis=1, keepdims=True)
             weighted -= peak
             # e^-700 ≈ 1e-304 is already negligible next to the peak's 1; clamping keeps exp
-            # out of the denormal range, where it is ~15x slower on this hardware.
+            # out of the denormal range, where it is much slower (bench/README.md).
             np.maximum(weighted, _LOG_FLOOR, out=weighted)
             resp = np.exp(weighted, out=weighted)
             total = resp.sum(axis=1, keepdims=True)

@@ -1,4 +1,4 @@
-"""A directory of fitted transfer models keyed by caller-chosen model ids (no rclpy).
+"""A directory of fitted transfer models keyed by caller-chosen model ids.
 
 One mapping service serves many robot pairs, so each model is stored under an id such as
 ``pincher->youbot``. A model lives in ``<directory>/<encoded id>.npz`` (the library's model
