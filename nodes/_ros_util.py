@@ -10,6 +10,7 @@ import weakref
 import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
 from rclpy.exceptions import ParameterUninitializedException
 from rclpy.parameter import Parameter
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile,
@@ -23,6 +24,12 @@ from lpa_transfer.robots.simulator import SimState
 from lpa_transfer_interfaces.msg import Matrix
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 
+
+#: The executor of the lock-step control loop's two ends (robot_sim's step service and the
+#: learners' robot clients): rclpy's C++ events executor, which dispatches a service request
+#: or response with far less Python work per call than SingleThreadedExecutor
+#: (bench/bench_control_period.py).
+FastExecutor = EventsExecutor
 
 #: Correspondence topics: every sample must arrive (reliable, deep queue); the batch is
 #: latched (transient local) so that a subscriber that joins late still gets the last one.
@@ -124,12 +131,14 @@ def qos_from_offered(offered, depth):
         liveliness=LivelinessPolicy.AUTOMATIC)
 
 
-def spin_until_stopped(node, stop):
+def spin_until_stopped(node, stop, executor_class=SingleThreadedExecutor):
     """Serve ``node`` until SIGINT/SIGTERM sets ``stop``, then clean up and shut rclpy down.
 
     A ``spin_once`` loop, not ``rclpy.spin`` (which can ignore signals in rclpy 7.1).
+    ``executor_class``: :class:`FastExecutor` for a node whose callbacks are a control loop's
+    critical path (robot_sim's step service).
     """
-    executor = SingleThreadedExecutor()
+    executor = executor_class()
     executor.add_node(node)
     try:
         while rclpy.ok() and not stop.is_set():
@@ -236,7 +245,7 @@ class RobotClients:
     def __init__(self, node, step_service, reset_service):
         self.node = rclpy.create_node(f"{node.get_name()}_robot_client",
                                       namespace=node.get_namespace(), use_global_arguments=False)
-        self.executor = SingleThreadedExecutor()
+        self.executor = FastExecutor()
         self.executor.add_node(self.node)
         self.step = self.node.create_client(StepRobot, step_service)
         self.reset = self.node.create_client(ResetRobot, reset_service)
@@ -261,9 +270,10 @@ def _describe(exc):
     return f"{type(exc).__name__}: {exc}"
 
 
-def serve(name, make_node, args=None):
-    """main() of a serving node: ``make_node(stop)`` then spin until SIGINT/SIGTERM; a node
-    that cannot start logs why and exits 1."""
+def serve(name, make_node, args=None, executor_class=SingleThreadedExecutor):
+    """main() of a serving node: ``make_node(stop)`` then spin until SIGINT/SIGTERM (with an
+    ``executor_class``, see :func:`spin_until_stopped`); a node that cannot start logs why
+    and exits 1."""
     stop = init_with_stop_event(args)
     try:
         node = make_node(stop)
@@ -271,7 +281,7 @@ def serve(name, make_node, args=None):
         rclpy.logging.get_logger(name).fatal(f"cannot start: {_describe(exc)}")
         rclpy.try_shutdown()
         raise SystemExit(1) from None
-    spin_until_stopped(node, stop)
+    spin_until_stopped(node, stop, executor_class)
 
 
 def run_job(name, make_node, job, args=None):

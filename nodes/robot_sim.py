@@ -49,7 +49,8 @@ from std_msgs.msg import Float64MultiArray
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import answering, array_parameter, serve, sim_stamp
+from lpa_transfer_nodes._ros_util import (FastExecutor, answering, array_parameter, serve,
+                                          sim_stamp)
 
 WORLD_FRAME = "world"
 
@@ -151,7 +152,8 @@ class RobotSim(Node):
 
 
 def main(args=None):
-    serve("robot_sim", lambda stop: RobotSim(), args)
+    # The step service is the lock-step control loop's critical path: the fast executor.
+    serve("robot_sim", lambda stop: RobotSim(), args, executor_class=FastExecutor)
 
 
 if __name__ == "__main__":
