@@ -4,8 +4,8 @@ Run (with two robot_sim nodes in lock-step mode under the namespaces ``/source``
 ``/target``, and lpa_mapping): ``correspondence_collector --ros-args -p
 source_robot:=scenarios/robots/two_link_source.toml -p target_robot:=... -p output:=pairs.npz``.
 
-What it does (:func:`lpa_transfer.exploration.correspondences.collect_correspondences`): drives both
-robots through one seeded babbling program over their ``StepRobot`` services, pairs their
+What it does (:func:`lpa_transfer.exploration.correspondences.collect_correspondences`): drives
+both robots through one seeded babbling program over their ``StepRobot`` services, pairs their
 samples by ``pairing_rule``, publishes every pair as it is made, saves the set, asks the
 mapping service to fit a model on it, and exits (0 on success). SIGINT/SIGTERM stop the
 babbling early: the pairs made so far are published and saved (``complete = False`` in the
@@ -13,76 +13,11 @@ file) and no model is fitted. Because the robots are stepped in lock-step, a run
 long as the computation, and the same parameters give the same pairs, bit for bit.
 
 Guided exploration (``program:=goal_babbling``, thesis §6.4.2, Alg. 7,
-:func:`lpa_transfer.exploration.correspondences.collect_guided_correspondences`): the target goal-babbles
-(Alg. 6) for ``guided_seconds`` on the joints it shares with the source, its other joints at
-``target_home``; then the source executes the same commands, its other joints at
-``source_home``. Pair i is each robot's observed (q̄, x) for command i: the positions its
-shared joints reached and its task coordinates (x, y for a planar arm, world x, y, z for a
-serial chain; ``features`` are ignored). First both robots are reset to rest at their homes
-(ResetRobot services ``source_reset``/``target_reset``, default
-``/source/robot_sim/reset`` and ``/target/robot_sim/reset``), so that the same seed gives the
-same pairs whatever ran before. The robot_sims run in position mode, the pairing rule is
-``same_command``; pairs are made (and published) while the source executes, and a
-SIGINT while the target still babbles leaves no pairs (``complete = False``).
+:func:`lpa_transfer.exploration.correspondences.collect_guided_correspondences`): the target
+goal-babbles (Alg. 6) on the joints it shares with the source, then the source executes the
+same commands; pair i is each robot's observed (q̄, x) for command i (``same_command``).
 
-Parameters:
-
-* ``source_robot``, ``target_robot``: robot parameter files (joint limits and kinematics, for
-  the babbling program and inverse kinematics); their ``name`` labels the pairs.
-* ``source_step``, ``target_step``: the robots' StepRobot services (default
-  ``/source/robot_sim/step`` and ``/target/robot_sim/step``).
-* ``source_home``, ``target_home`` (double arrays): the poses babbling starts from; default
-  zero clipped into the limits, robot_sim's default initial pose.
-* ``pairing_rule``: ``same_command`` (default), ``same_time_index`` or ``same_task_point``.
-* ``program``: ``joint_lines`` (default), ``task_lines`` or ``goal_babbling`` (guided
-  exploration, above); ``n_segments`` (20), ``samples_per_segment`` (5), ``time_law``
-  (``linear``, default, or ``minimum_jerk``: how the samples are spaced along each line,
-  :mod:`lpa_transfer.exploration.babbling`), ``steps_per_sample``
-  (physics steps between samples, 400), ``seed`` (0), ``task_low``/``task_high``
-  (task_lines' waypoint box, m), ``task_offset`` (same_task_point: the target's task frame
-  relative to the source's, m);
-  ``source_task_low``/``source_task_high`` and ``target_task_*``: each robot's own box for
-  task_lines (robots of different sizes babble in their own workspaces, §5.4.1; the same
-  seed puts the waypoints at the same relative places).
-* goal_babbling only: ``guided_seconds`` (T_guided, simulated s, default 60: the target's
-  babbling time), ``x_low``/``x_high`` (double arrays, required: X_bounds, the box of the
-  target's goals in its task space), ``source_joints``/``target_joints`` (int arrays: the
-  shared joints, ``source_joints[i]`` is ``target_joints[i]``; default the first
-  min(n_s, n_t) joints of each), ``target_range`` (``shared``, default: the target explores
-  within both robots' ranges of the shared joints; ``own``: within its own, and only the
-  commands the source could follow are pairs, see :mod:`lpa_transfer.exploration.guided`;
-  the file then also holds the target's rows of every command, ``meta_target_experience``,
-  and ``meta_followed``), ``n_subtargets`` (T, 10), ``sigma`` (0.1) and ``drift``
-  (0.01) of the exploration noise, ``p_home`` (0.1, returns home), ``steps_per_second``
-  (movement steps a simulated second, 10.0), see :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`;
-  ``seed`` seeds it and ``steps_per_sample`` is the physics steps of one movement step (e.g.
-  100 with robot_sim's 1 ms step for 10 steps a second). ``*_task_*``, ``task_offset``,
-  ``features``, ``n_segments``/``samples_per_segment`` and ``time_law`` do not apply.
-* ``source_task_halfwidth``, ``target_task_halfwidth`` (m, one value per task coordinate):
-  instead of ``*_task_low``/``*_task_high``, babble in the box of this half-width around the
-  end effector at ``*_home`` — "in the vicinity" of a task centred there (§5.5.3,
-  :func:`lpa_transfer.exploration.babbling.box_around`).
-* ``source_pid``, ``target_pid`` (double arrays ``[kp, ki, kd]``, default empty): set for a
-  robot_sim in torque mode; the robot then tracks the babbling commands with this PID
-  (:class:`lpa_transfer.robots.control.PIDServo`), as §5.4.1 collects inverse-dynamics data.
-* ``features`` (string array, default ``[position, ee_x, ee_y]``): the columns of a sample,
-  see :mod:`lpa_transfer.exploration.correspondences`.
-* ``output``: the ``.npz`` to save the set to (``source``, ``target`` arrays and metadata;
-  the file lpa_mapping's ``correspondence_file`` reads); empty = do not save.
-* ``model_id``: fit a model under this id when done (empty = do not fit); ``method``
-  (``lpa``), ``latent_dim``, ``n_min``, ``c_min``, ``k_max``, ``cluster_dims``, ``n_init``
-  as in FitModel.srv (0/empty = defaults), ``random_state`` (the seed);
-  ``mapping_service`` (``/lpa_mapping/fit``).
-* ``wait_for_subscribers`` (0): babble only once ``correspondences`` has this many
-  subscribers (e.g. 2 for a recorder and lpa_mapping), so none misses the first pairs.
-* ``wait_for_subscribed_topics`` (string array): also wait until each of these topics has a
-  subscriber, e.g. the robots' ``joint_states``, so a recorder records from the first step.
-* ``wait_timeout`` (s, 30): how long to wait for each service (and the subscribers);
-  ``call_timeout`` (s, 120): how long a single call may take (a fit on many points).
-
-Topics: ``correspondences`` (CorrespondenceSample, one per pair, header stamp = the source's
-simulated time) and, when done, ``correspondence_batch`` (CorrespondenceBatch, the whole
-set; transient local, so a late subscriber still gets it).
+Parameters, topics and the details of guided exploration: docs/nodes.md.
 """
 import dataclasses
 import os

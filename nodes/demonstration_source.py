@@ -8,13 +8,10 @@ demonstrations`: LASA shapes placed in a box of the demonstrator's task space an
 its IK) and publishes each on ``demonstrations`` (lpa_transfer_interfaces/msg/Demonstration),
 reliable and transient local with a queue of all of them, so a subscriber that joins later
 (the experiment, the recorder) still receives every one. It then keeps serving them until
-SIGINT/SIGTERM.
+SIGINT/SIGTERM. A shape the demonstrator cannot trace, or a bad parameter, stops the node at
+start with the reason.
 
-Parameters: ``frames`` (the scenario's frames file: its ``demonstrator`` is the body that
-demonstrates), ``shapes`` (LASA shape names), ``n_demos`` (per shape, 5), ``n_samples`` (per
-demonstration, 100), ``task_box_low`` / ``task_box_high`` (m, the demonstrator's world frame),
-``layout_seed`` (0), ``n_joints`` (4: the demonstrator's joints that move). A shape the
-demonstrator cannot trace, or a bad parameter, stops the node at start with the reason.
+Parameters (frames, shapes, n_demos, n_samples, task box, ...): docs/nodes.md.
 """
 import os
 import time

@@ -5,84 +5,21 @@ Run (next to a robot_sim in position mode, lock-step, in the same namespace):
 -p robot:=scenarios/robots/goal_babbling_target.toml -p home:=[-0.785398,1.65]
 -p x_low:=[0.1,-1.1] -p x_high:=[1.1,0.4]``.
 
-The node is the rclpy adapter of one learner of :func:`lpa_transfer.goal_babbling.experiment.
-run_condition`: online goal babbling (Alg. 6, :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`)
-on the robot through its StepRobot service (:func:`lpa_transfer.robots.environment.
-stepped_environment`: every command runs ``steps_per_sample`` physics steps in position mode,
-and the model learns the OBSERVED joint positions and end effector), into a K-nearest-neighbour
-inverse model L⁻¹ (:mod:`lpa_transfer.learners.sensorimotor`, K = 3 in §6.5). The model can be
-initialised offline (§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration)
-and with experience transferred from another robot, optionally behind the guard against
-negative transfer (:class:`lpa_transfer.goal_babbling.negative_transfer.GuardedModel`, §6.6). Progress is
-measured as in §6.5 (:mod:`lpa_transfer.goal_babbling.reaching`): the mean reaching error and the reaching
-rate of L⁻¹ on test points evenly spread through the reachable part of a task box, executed on
-the robot's ANALYTIC forward kinematics (evaluating never moves the simulated robot, so it
-does not disturb babbling).
+The node is the rclpy adapter of one learner of
+:func:`lpa_transfer.goal_babbling.experiment.run_condition`: online goal babbling (Alg. 6,
+:class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`) on the robot through its
+StepRobot service, into a K-nearest-neighbour inverse model L⁻¹
+(:mod:`lpa_transfer.learners.sensorimotor`). ``~/initialise`` initialises the model offline
+(§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration) and with
+experience transferred from another robot, optionally behind the guard against negative
+transfer (:class:`lpa_transfer.goal_babbling.negative_transfer.GuardedModel`, §6.6);
+``~/babble`` goal-babbles for some simulated seconds. Progress is measured as in §6.5
+(:mod:`lpa_transfer.goal_babbling.reaching`): the mean reaching error and the reaching rate of
+L⁻¹ on test points in the reachable part of a task box, executed on the robot's ANALYTIC
+forward kinematics (evaluating never moves the simulated robot), published on
+``reaching_evaluation``.
 
-The learner's clock (s of simulated exploration, the x axis of the thesis' learning curves)
-starts at 0; ``initialise`` advances it by the ``elapsed`` time its own samples took (e.g.
-T_guided) and babbling by ``1 / steps_per_second`` per step.
-
-Parameters:
-
-* ``robot`` (required): the robot parameter file (joint limits and analytic kinematics;
-  planar chains learn (x, y), serial chains world (x, y, z)).
-* ``home`` (double array, default zero clipped into the joint limits): q_home, where babbling
-  starts and returns to (:class:`~lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`).
-* ``active_joints`` (integer array, default all): babble with these joints only, the others
-  held at home (:func:`lpa_transfer.robots.kinematics.hold_at_home`); rows stay (q, x) of
-  all joints, and the test points are those the active joints reach. A source robot
-  explores like this when only its joints shared with the target are transferred (§6.5.2).
-* ``x_low``, ``x_high`` (double arrays, required): X_bounds, the task box goals are drawn
-  from (m).
-* GoalBabbling's hyperparameters: ``n_subtargets`` (T, 10), ``sigma`` (0.1), ``drift``
-  (0.01), ``p_home`` (0.1), ``steps_per_second`` (10.0), ``seed`` (0). The same parameters
-  and the same calls give the same experience, bit for bit.
-* ``steps_per_sample`` (100): physics steps per babbling step. One babbling step should last
-  1 / ``steps_per_second`` simulated seconds, i.e. ``steps_per_sample`` · ``physics_step``
-  (s, 0.001, the simulator's); a warning is logged if they disagree.
-* ``n_neighbors`` (3): K of the inverse model.
-* ``guard`` (bool, false): take transferred samples into a GuardedModel (lower weight, retired
-  once covered or contradicted by own data) instead of learning them like own data (as the
-  thesis does); ``guard_params`` (JSON object string, ``'{}'``): GuardedModel's
-  hyperparameters (``transferred_weight``, ``coverage_radius``, ``coverage_count``,
-  ``disagreement_threshold``, ``lipschitz``, ``n_checked``). ``lipschitz`` defaults to
-  :func:`~lpa_transfer.goal_babbling.negative_transfer.chain_lipschitz` of the robot's links (planar or
-  serial).
-* ``eval_low``, ``eval_high`` (double arrays, default X_bounds): the box of the test points;
-  ``eval_spacing`` (m, 0.05): their grid spacing; ``eval_joint_samples`` (20000): the joint
-  samples that find the reachable grid points (:func:`lpa_transfer.goal_babbling.reaching.
-  evaluation_points`; a 3-D box needs more than a planar one to find its thin parts;
-  computed once at start-up, the node does not start without any);
-  ``reaching_threshold`` (m, 0.01, §6.5.1).
-* ``step_service``, ``reset_service`` (default ``robot_sim/step``, ``robot_sim/reset``,
-  resolved in the node's namespace); ``call_timeout`` (s, 30) for each robot call;
-  ``wait_timeout`` (s, 30) for the robot's services.
-
-Services:
-
-* ``~/initialise`` (InitialiseSensorimotor): with ``reset``, first put the robot at rest at
-  q_home, and start afresh (a new model, the clock at 0, babbling restarts at the next
-  ``babble``, seeded by the request's ``seed``, or by the parameter if it is -1). Then learn
-  the ``own`` rows (q, x) with weight 1, then the ``transferred`` rows (guarded: as
-  transferred samples; unguarded: like own data), advance the clock by
-  ``elapsed``, and answer (and publish) an evaluation. Rows need n_joints + task-dimension
-  columns; rows with NaN/inf are rejected and counted, never learned. A model without any
-  sample is evaluated as ``mean_error`` NaN, ``reaching_rate`` 0.
-* ``~/babble`` (GoalBabble): goal-babble ``seconds`` on the robot, one GoalBabbling run
-  continued across calls (the first call after start-up or a reset puts the robot at rest at
-  q_home and starts it: L⁻¹ learns the (q_home, x_home) observed there, Alg. 6 l. 4). The model
-  is evaluated whenever the learner's clock reaches a multiple of ``evaluation_interval``
-  (0: never) and at the end (once, if the end is such a multiple). Answers the evaluations,
-  the experience of the call (observed q, x per step; not the home sample of a start) and the
-  robot's simulated time. SIGINT/SIGTERM stop babbling within a step (success false); what
-  was learned until then stays learned, as it does when a call fails midway.
-
-Bad requests are answered with ``success=false`` and a message; the node keeps serving.
-
-Topic: ``reaching_evaluation`` (ReachingEvaluation, every evaluation of either service;
-header stamp = the robot's simulated time at the evaluation, or the last one known, frame
-``world``).
+Parameters, topics, services and the learner's clock: docs/nodes.md.
 """
 import json
 import math

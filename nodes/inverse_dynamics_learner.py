@@ -1,38 +1,22 @@
 """inverse_dynamics_learner: online inverse-dynamics learning for torque tracking (thesis ch. 5).
 
 Run (next to a robot_sim in torque mode, lock-step, in the same namespace):
-``inverse_dynamics_learner --ros-args -r __ns:=/pincher -p robot:=scenarios/robots/pincher_arm.toml
--p centre_pose:=[0.0,0.6,0.9,0.6] -p star_radius:=0.05 -p pid:=[5.0,0.01,0.1]``.
+``inverse_dynamics_learner --ros-args -r __ns:=/pincher
+-p robot:=scenarios/robots/pincher_arm.toml -p centre_pose:=[0.0,0.6,0.9,0.6]
+-p star_radius:=0.05 -p pid:=[5.0,0.01,0.1]``.
 
-The node runs the control loop of Fig. 5-1 (:class:`lpa_transfer.inverse_dynamics.online_learning.FeedForwardLearner`)
-on its robot through the robot's StepRobot service: at every control period the learned
-feed-forward torque τ_ff(q_d, q̇_d, q̈_d) plus PID feedback, then one online update from the
-observed (q, q̇, q̈, τ). The task is a 'star' (§5.5.1, :mod:`lpa_transfer.inverse_dynamics.tasks`) around the
-end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
+The node runs the control loop of Fig. 5-1
+(:class:`lpa_transfer.inverse_dynamics.online_learning.FeedForwardLearner`) on its robot
+through the robot's StepRobot service: at every control period the learned feed-forward
+torque τ_ff(q_d, q̇_d, q̈_d) plus PID feedback, then one online update from the observed
+(q, q̇, q̈, τ). The task is a 'star' (§5.5.1, :mod:`lpa_transfer.inverse_dynamics.tasks`)
+around the end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
 
-Parameters:
+``~/initialise`` (InitialiseLearner) learns offline from (q, q̇, q̈, τ) samples, e.g. another
+robot's experience transferred through the mapping service; ``~/run_trials`` (RunTrials) runs
+trials from rest at ``centre_pose``, each also published on ``trial_result``.
 
-* ``robot``: the robot parameter file; ``step_service`` and ``reset_service`` (default
-  ``robot_sim/step``, ``robot_sim/reset``, resolved in the node's namespace): every RunTrials
-  call first resets the robot to rest at ``centre_pose`` (plus the request's
-  ``start_offset``, if any: a seeded run's perturbed start).
-* ``control_rate`` (Hz, 100; up to 1000) and ``physics_step`` (s, 0.001, the simulator's):
-  each control period advances round(1 / (control_rate · physics_step)) physics steps.
-* ``pid``: ``[kp, ki, kd]`` (thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0]).
-* ``centre_pose`` (joint angles): the star's centre is this pose's end-effector position,
-  and every RunTrials call starts there;
-  ``star_u``, ``star_v`` (the star's plane, default world x and y), ``star_radius`` (m),
-  ``star_spread`` (rad, 2π), ``star_start_angle`` (rad, 0).
-* ``regressor`` (``lwpr``) and ``regressor_params`` (JSON object of its hyperparameters,
-  e.g. ``{"init_D": 30, "init_alpha": 1.1}``): the online learner is a parameter. LWPR's
-  ``norm_in`` defaults to the spread of the task's desired states
-  (:func:`lpa_transfer.inverse_dynamics.online_learning.input_scale`).
-* ``call_timeout`` (s, 30) for each robot step; ``wait_timeout`` (s, 30) for the robot.
-
-Services: ``~/initialise`` (InitialiseLearner: learn offline from (q, q̇, q̈, τ) samples,
-optionally after a reset) and ``~/run_trials`` (RunTrials: run trials, answer their errors and
-the experience). Topic: ``trial_result`` (TrialResult, one per trial, with the desired and
-actual end-effector paths). Bad samples (NaN/inf) are rejected and counted, never learned.
+Parameters, topics and services: docs/nodes.md.
 """
 import json
 import os

@@ -1,35 +1,20 @@
 """lpa_mapping: the mapping service — fits PA/LPA transfer models and transfers points.
 
-Run: ``lpa_mapping --ros-args -p model_dir:=/path`` (or ``python -m lpa_transfer_nodes.lpa_mapping``).
+Run: ``lpa_mapping --ros-args -p model_dir:=/path`` (or
+``python -m lpa_transfer_nodes.lpa_mapping``).
 
-Parameter ``model_dir`` (default ``~/.lpa_transfer/models``): where models are persisted, one
-``.npz`` per model id (:mod:`lpa_transfer.transfer.model_store`); all are reloaded on start, so a
-restarted service answers as before.
+A thin ROS adapter over :class:`lpa_transfer.transfer.model_store.ModelStore`. ``~/fit`` fits
+a ``"pa"`` or ``"lpa"`` model on correspondences between a source and a target robot (given in
+the request, read from a correspondence file, or received on the ``correspondences`` and
+``correspondence_batch`` topics) and stores it under a model id; ``~/transfer`` maps source
+points into the target domain through a stored model; ``~/list``, ``~/describe`` and
+``~/delete`` manage the models. Models persist in ``model_dir`` and are reloaded on start, so
+a restarted service answers as before. Every bad request is answered with ``success=false``
+and the library's message; the node keeps serving.
 
-Services, under the node's name (``/lpa_mapping/...`` by default), types in
-``lpa_transfer_interfaces/srv``:
-
-* ``~/fit`` (FitModel): fit a ``"pa"`` or ``"lpa"`` model on the correspondences in the
-  request and store it under ``model_id``. ``latent_dim = 0`` and ``k_max = 0`` mean "no
-  limit", ``n_min = 0`` and ``n_init = 0`` the library defaults (7 and 3), and an empty
-  ``cluster_dims`` means all source dimensions (the library's ``None``);
-  PA uses only ``latent_dim``. When ``source`` and ``target`` are both empty, the
-  correspondences are read from ``correspondence_file``: a NumPy ``.npz`` with the arrays
-  ``source`` (N, D_s) and ``target`` (N, D_t), row i of each in correspondence. When that is
-  empty too, ``received_pair`` (``"source_robot->target_robot"``) names correspondences the
-  node received on its topics (below).
-* ``~/transfer`` (TransferPoints): map source points through a stored model.
-* ``~/list`` (ListModels), ``~/describe`` (DescribeModel), ``~/delete`` (DeleteModel).
-
-Topics: the node keeps the correspondences published on ``correspondences``
-(CorrespondenceSample, e.g. by correspondence_collector or a player replaying a bag) and
-``correspondence_batch`` (CorrespondenceBatch), per robot pair. A sample with index 0 starts
-a new collection of its pair (a replay of the same bag thus gives the same set, not twice
-it); a batch replaces its pair's set whole.
-
-Every bad request (unknown id or method, rows*cols not matching the data, NaN/inf, too few
-points, wrong widths) is answered with ``success=false`` and the library's message; any other
-error is logged and answered the same way, so the node keeps serving.
+From your own node, call it through :class:`lpa_transfer_nodes.mapping_client.MappingClient`.
+Parameters, topics, services and FitModel's hyperparameters (latent_dim, n_min, c_min, ...):
+docs/nodes.md.
 """
 import json
 

@@ -1,14 +1,12 @@
 """player: replay an MCAP bag onto the ROS graph, our stand-in for ``ros2 bag play``.
 
-Parameters: ``input`` (the .mcap, required), ``rate`` (1.0 = recorded timing, 2.0 = twice as
-fast, 0 = as fast as possible), ``topics`` (subset; empty = all), ``remap`` (``from:=to``
-entries), ``loop`` (false), ``start_delay`` (s before publishing, default 1.0, for discovery),
-``wait_for_subscribers`` (each topic needs this many subscribers before playing, default 0),
-``wait_timeout`` (s for that wait, default 10; playing starts anyway afterwards, with a warning),
-``qos_depth`` (1000).
+Run: ``player --ros-args -p input:=run.mcap`` (or
+``python -m lpa_transfer_nodes.player ...``).
 
 Messages are published as the recorded CDR bytes, with the QoS the recorded publishers offered.
 Exits 0 when done (after the reliable subscribers acknowledged everything) or on SIGINT/SIGTERM.
+
+Parameters (input, rate, topics, remap, loop, ...): docs/nodes.md.
 """
 import time
 

@@ -1,12 +1,13 @@
 """recorder: record topics into an MCAP bag (rosbag2 layout), our stand-in for ``ros2 bag record``.
 
-Parameters: ``output`` (path of the .mcap, required), ``topics`` (names to record; empty = all),
-``topic_regex`` (only topics matching it), ``exclude`` (default /rosout, /parameter_events),
-``discovery_period`` (s between graph scans for new topics, default 0.5), ``qos_depth`` (1000).
+Run: ``recorder --ros-args -p output:=run.mcap`` (or
+``python -m lpa_transfer_nodes.recorder ...``).
 
 Subscriptions are raw (serialized CDR), written in the callback. On SIGINT/SIGTERM the node
 stops discovery, drains messages still queued, closes the bag (readable, with summary), logs
 the per-topic counts and exits 0.
+
+Parameters (output, topics, topic_regex, exclude, ...): docs/nodes.md.
 """
 import re
 import time

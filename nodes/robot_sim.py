@@ -3,39 +3,22 @@
 Run: ``robot_sim --ros-args -p robot:=scenarios/robots/two_link_source.toml`` (or
 ``python -m lpa_transfer_nodes.robot_sim ...``).
 
-Parameters:
+Lock-step mode (default): the service ``~/step`` (StepRobot) applies a command, advances
+``n_steps`` physics steps and answers with the new state; ``~/reset`` (ResetRobot) puts the
+robot at rest at a pose (the clock runs on). Why: the experiments (babbling, demonstrations,
+evaluating transferred models) should run faster than real time and give the same numbers on
+every run. When the caller advances the simulation, nothing depends on timers, CPU load or DDS
+latency: the same sequence of requests always yields the same trajectory, as fast as the
+machine can compute it.
 
-* ``robot``: a robot parameter file (``scenarios/robots/*.toml``); the URDF is generated from
-  it (:func:`lpa_transfer.robots.simulator.robot_urdf`). Or ``urdf``: a URDF file. Exactly one.
-* ``control_mode``: ``"position"`` (default; commands are joint targets) or ``"torque"``.
-* ``physics_step`` (s, default 0.001): the pybullet time step.
-* ``control_rate`` (Hz, default 100): free-running mode only, see below.
-* ``initial_positions`` (double array, default: zero clipped into the joint limits).
-* ``seed`` (int, default 0): passed to the simulator (which is deterministic).
-* ``position_gain`` (default 0.05): the position motors' gain, see
-  :class:`lpa_transfer.robots.simulator.RobotSimulator` (pybullet's own default 0.1 can chatter).
-* ``lockstep`` (bool, default true).
+Free-running mode (``lockstep:=false``): a timer advances the simulation so that simulated
+time tracks wall time, with the latest command received on ``joint_commands``.
 
-Lock-step mode (default): the service ``~/step`` (lpa_transfer_interfaces/srv/StepRobot)
-applies a command, advances ``n_steps`` physics steps and answers with the new state;
-``~/reset`` (ResetRobot) puts the robot at rest at a pose (the clock runs on). Why:
-the experiments (babbling, demonstrations, evaluating transferred models) should run faster
-than real time and give the same numbers on every run. When the caller advances the
-simulation, nothing depends on timers, CPU load or DDS latency: the same sequence of
-requests always yields the same trajectory, as fast as the machine can compute it.
+Both modes publish ``joint_states`` and ``end_effector`` after each advance. Bad requests are
+refused and bad commands ignored (logged); neither touches the simulation, and the node keeps
+serving.
 
-Free-running mode (``lockstep:=false``): a timer at ``control_rate`` advances the simulation
-by ``round(1 / (control_rate * physics_step))`` physics steps (≥ 1), so simulated time tracks
-wall time, with the latest command received on ``joint_commands``
-(std_msgs/Float64MultiArray). Until the first command the robot holds its initial pose
-(position mode) or gets zero torques (torque mode). Bad commands are logged and ignored.
-
-Both modes publish after each advance: ``joint_states`` (sensor_msgs/JointState: name,
-position, velocity, effort = the applied torque; header.stamp = simulated time) and
-``end_effector`` (geometry_msgs/PointStamped, frame ``world``, same stamp).
-
-A bad request (wrong command length, NaN/inf) is answered with ``success=false`` and a message
-saying what was wrong; the simulation is not touched and the node keeps serving.
+Parameters, topics and services: docs/nodes.md.
 """
 import math
 import os

@@ -4,33 +4,16 @@ Run (next to a robot_sim in position mode, lock-step, in the same namespace):
 ``skill_learner --ros-args -r __ns:=/meka -p robot:=scenarios/robots/meka_right_arm.toml``
 (or ``python -m lpa_transfer_nodes.skill_learner ...``).
 
-Each LearnSkill call fits one :class:`lpa_transfer.lfd.dmp.JointDMP` (eq. 4.1-4.5) on a shape's
-demonstrations in this robot's joint space (transferred by LPA, or traced by its own IK),
-reproduces the first demonstration with it (§4.5.2: "reproduce the first demonstration") and
-executes that reproduction on the robot's simulator: a reset to its first pose, then each
-sample commanded in position mode for the physics steps of its time interval. Poses are
-clipped into the joint limits first (as position mode clips its targets; a reset outside them
-would be refused), so a reproduction that leaves the limits shows in the reported distance.
+Each LearnSkill call (``~/learn_skill``) fits one :class:`lpa_transfer.lfd.dmp.JointDMP`
+(eq. 4.1-4.5) on a shape's demonstrations in this robot's joint space (transferred by LPA, or
+traced by its own IK), reproduces the first demonstration with it (§4.5.2: "reproduce the
+first demonstration") and executes that reproduction on the robot's simulator: a reset to its
+first pose, then each sample commanded in position mode for the physics steps of its time
+interval. Poses are clipped into the joint limits first (as position mode clips its targets;
+a reset outside them would be refused), so a reproduction that leaves the limits shows in the
+reported distance. Each learned skill is also published on ``skill_reproduction``.
 
-Parameters:
-
-* ``robot``: the robot parameter file; ``n_joints`` (4): the DMP drives the robot's first n
-  joints, the others are held at the robot's home (zero clipped into the limits).
-* ``dmp_weights_per_joint`` (30) and ``dmp_alpha_z`` (25.0): the DMP's N and α_z.
-* ``physics_step`` (s, 0.001, the simulator's): sample k is commanded for
-  round((t_k − t_{k−1}) / physics_step) + ``settle_steps`` physics steps (at least 1).
-* ``settle_steps`` (0): extra physics steps after each command before the end effector is
-  read. The position motors lag their targets, so the executed points trail the reproduction's
-  forward kinematics; settling shrinks that lag but stretches the executed motion in time.
-* ``step_service`` and ``reset_service`` (default ``robot_sim/step``, ``robot_sim/reset``,
-  resolved in the node's namespace); ``call_timeout`` (s, 30) for each robot call;
-  ``wait_timeout`` (s, 30) for the robot.
-
-Service: ``~/learn_skill`` (LearnSkill). A bad request (no demonstrations, a joints matrix
-without n_joints columns, fewer than 3 samples, NaN/inf, times not increasing or not one per
-sample) is answered with ``success=false`` and the reason; the node keeps serving.
-Topic: ``skill_reproduction`` (SkillReproduction, one per learned skill: stamp = the simulated
-time at the end of the execution).
+Parameters, topics and services: docs/nodes.md.
 """
 import os
 
