@@ -39,9 +39,12 @@ BATCH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 
 
 def to_matrix(values):
-    """A Matrix message of a 2-D float64 array (fast buffer copy, see the ROS notes)."""
-    return Matrix(rows=values.shape[0], cols=values.shape[1],
-                  data=array.array("d", values.astype("float64", order="C").tobytes()))
+    """A Matrix message of a 2-D float64 array: one buffer copy into the ``array.array`` that
+    rclpy takes without converting element by element (see the ROS notes)."""
+    values = np.ascontiguousarray(values, dtype=np.float64)   # no copy when it already is
+    data = array.array("d")
+    data.frombytes(memoryview(values.reshape(-1)).cast("B"))
+    return Matrix(rows=values.shape[0], cols=values.shape[1], data=data)
 
 
 def from_matrix(msg, name):
