@@ -5,7 +5,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.mixture import GaussianMixture
 
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
-from lpa_transfer.transfer import gmm
+from lpa_transfer.transfer import gmm, local_procrustes
 from lpa_transfer.transfer.init_em import cluster_errors, init_em
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 from two_link import correspondences, mapping_rmse_mm
@@ -152,10 +152,190 @@ def test_bad_data_is_rejected():
         LocalProcrustesAnalysis().fit(source, target[:-1])
     bad = source.copy()
     bad[3, 1] = np.nan
-    with pytest.raises(ValueError, match="source contains NaN or infinite values \\(first in row 3\\)"):
+    with pytest.raises(ValueError,
+                       match="source contains NaN or infinite values \\(first in row 3\\)"):
         LocalProcrustesAnalysis().fit(bad, target)
     with pytest.raises(NotFittedError):
         LocalProcrustesAnalysis().transfer(source)
     lpa = LocalProcrustesAnalysis(**LPA_2LINK).fit(source, target)
     with pytest.raises(ValueError, match="3 columns but the model was fitted on 4"):
         lpa.transfer(source[:, :3])
+
+
+# Transfer (Alg. 4, eq. 3.12): the dense and the sparse path against each other and against
+# the plain per-point sum. Both paths add a point's terms in increasing k like the per-point
+# sum; BLAS may round an entry of f_k(z_s) differently with the shape of the product it is
+# part of, so they agree to a few ulps rather than bit for bit.
+
+def random_mixture(n_clusters, n_in, n_out, width, n_points=300, seed=0):
+    """A mixture of K components in a 3-D clustering space, random local maps D_s -> D_t,
+    and source points; ``width`` (relative to the components' spacing) sets how spread the
+    responsibilities are. The offsets keep the outputs away from 0, where rtol means little."""
+    rng = np.random.default_rng(seed)
+    means = rng.uniform(-1, 1, (n_clusters, 3))
+    precisions = np.tile(np.eye(3) / (width * n_clusters ** (-1 / 3)), (n_clusters, 1, 1))
+    weights = rng.dirichlet(np.ones(n_clusters))
+    coef = rng.normal(size=(n_clusters, n_out, n_in))
+    intercept = 20.0 + rng.normal(size=(n_clusters, n_out))
+    source = np.hstack((rng.uniform(-1, 1, (n_points, 3)), rng.normal(size=(n_points,
+                                                                            n_in - 3))))
+    gamma = gmm.responsibilities(source[:, :3], weights, means, precisions)
+    return source, gamma, coef, intercept
+
+
+def per_point_transfer(source, gamma, coef, intercept):
+    """ẑ_t = Σ_k γ_k (W_k z_s + b_k) point by point, terms with γ_k < 1e-17 left out."""
+    out = np.zeros((len(source), coef.shape[1]))
+    for i, (point, weights) in enumerate(zip(source, gamma)):
+        for k in np.flatnonzero(weights >= 1e-17):
+            out[i] += weights[k] * (np.array([row @ point for row in coef[k]]) + intercept[k])
+    return out
+
+
+def blocks_of(gamma, size):
+    return [(slice(start, start + size), gamma[start:start + size])
+            for start in range(0, len(gamma), size)]
+
+
+def mixed(source, gamma, coef, intercept, path, block=64):
+    return local_procrustes.mix_local_maps(source, blocks_of(gamma, block), coef, intercept,
+                                           path=path)
+
+
+@pytest.mark.parametrize("n_clusters, width, spread", [
+    (1, 1.0, False), (40, 0.05, False), (40, 2.0, True), (7, 5.0, True)])
+def test_dense_and_sparse_paths_equal_the_per_point_sum(n_clusters, width, spread):
+    source, gamma, coef, intercept = random_mixture(n_clusters, 6, 4, width)
+    per_point = (gamma >= 1e-17).sum(axis=1).mean()
+    assert (per_point > 3) == spread                  # the cases are what they claim to be
+    expected = per_point_transfer(source, gamma, coef, intercept)
+    for path in ("dense", "sparse", None):
+        np.testing.assert_allclose(mixed(source, gamma, coef, intercept, path), expected,
+                                   rtol=1e-12, atol=0)
+    np.testing.assert_allclose(mixed(source, gamma, coef, intercept, "dense"),
+                               mixed(source, gamma, coef, intercept, "sparse"),
+                               rtol=1e-12, atol=0)
+
+
+def test_paths_split_at_every_block_boundary(monkeypatch):
+    # Blocks of 7 rows; the dense path split into 5-row products of 2 clusters each; the
+    # sparse path evaluating its pairs every few blocks.
+    source, gamma, coef, intercept = random_mixture(12, 5, 3, 0.7, n_points=101, seed=1)
+    expected = per_point_transfer(source, gamma, coef, intercept)
+    monkeypatch.setattr(local_procrustes, "_DENSE_ROWS", 5)
+    monkeypatch.setattr(local_procrustes, "_BLOCK_ELEMENTS", 5 * 2 * 3)
+    monkeypatch.setattr(local_procrustes, "_SPARSE_ELEMENTS", 8 * 40)
+    monkeypatch.setattr(local_procrustes, "_SPARSE_PAIRS_PER_CLUSTER", 1)
+    flushes = []
+    original = local_procrustes._SparseTerms.flush
+    monkeypatch.setattr(local_procrustes._SparseTerms, "flush",
+                        lambda self: flushes.append(self.size) or original(self))
+    for path in ("dense", "sparse"):
+        np.testing.assert_allclose(mixed(source, gamma, coef, intercept, path, block=7),
+                                   expected, rtol=1e-12, atol=0)
+    assert len([size for size in flushes if size]) > 3
+
+
+def test_a_point_without_responsibility_maps_to_zero_on_both_paths():
+    source, gamma, coef, intercept = random_mixture(5, 4, 2, 0.5, n_points=20, seed=2)
+    gamma[[0, 7, 19]] = 0.0
+    for path in ("dense", "sparse"):
+        out = mixed(source, gamma, coef, intercept, path, block=8)
+        assert (out[[0, 7, 19]] == 0).all()
+        np.testing.assert_allclose(out, per_point_transfer(source, gamma, coef, intercept),
+                                   rtol=1e-12, atol=0)
+
+
+def test_transfer_takes_the_dense_path_only_when_responsibilities_are_spread(monkeypatch):
+    lpa = LocalProcrustesAnalysis(**LPA_2LINK).fit(*correspondences(400, seed=6))
+    test_source = correspondences(2000, seed=7)[0]
+    calls = []
+    original = local_procrustes._dense_block
+    monkeypatch.setattr(local_procrustes, "_dense_block",
+                        lambda *args: calls.append(len(args[1])) or original(*args))
+    fitted = lpa.precisions_cholesky_
+    for scale, spread in ((30.0, False), (1.0, True), (1 / 30, True)):
+        lpa.precisions_cholesky_ = fitted * scale        # narrower or wider components
+        gamma = lpa.responsibilities(test_source)
+        share = (gamma >= 1e-17).mean()
+        assert (share >= local_procrustes.dense_share(4, 4, lpa.n_clusters_)) == spread
+        calls.clear()
+        transferred = lpa.transfer(test_source)
+        assert sum(calls) == (len(test_source) if spread else 0)
+        np.testing.assert_allclose(transferred, per_point_transfer(
+            test_source, gamma, lpa.coef_, lpa.intercept_), rtol=1e-12, atol=1e-14)
+        other = "sparse" if spread else "dense"
+        np.testing.assert_allclose(transferred, local_procrustes.mix_local_maps(
+            test_source, blocks_of(gamma, 500), lpa.coef_, lpa.intercept_, path=other),
+            rtol=1e-12, atol=1e-14)
+
+
+def test_dense_share_grows_with_the_size_of_the_local_maps_and_falls_with_k():
+    shares = [local_procrustes.dense_share(d, d, 50) for d in (2, 4, 20, 40, 100)]
+    assert all(0 < a < b for a, b in zip(shares, shares[1:]))
+    shares = [local_procrustes.dense_share(20, 16, k) for k in (1, 100, 1000, 10_000)]
+    assert all(a >= b > 0 for a, b in zip(shares, shares[1:]))
+    with pytest.raises(ValueError, match="path must be"):
+        local_procrustes.mix_local_maps(np.ones((2, 2)), [], np.ones((1, 2, 2)),
+                                        np.ones((1, 2)), path="fast")
+
+
+@pytest.mark.parametrize("width", [0.02, 3.0])
+def test_transfer_work_arrays_stay_bounded(width):
+    # 20,000 points x 600 clusters: γ alone would take 96 MB and the local maps 192 MB.
+    import tracemalloc
+    rng = np.random.default_rng(3)
+    n_points, n_clusters = 20_000, 600
+    model = LocalProcrustesAnalysis()
+    model.weights_ = np.full(n_clusters, 1 / n_clusters)
+    model.means_ = rng.uniform(-1, 1, (n_clusters, 2))
+    model.precisions_cholesky_ = np.tile(np.eye(2) / (width * n_clusters ** -0.5),
+                                         (n_clusters, 1, 1))
+    model.coef_ = rng.normal(size=(n_clusters, 2, 3))
+    model.intercept_ = rng.normal(size=(n_clusters, 2))
+    model.cluster_dims_, model.n_clusters_ = np.arange(2), n_clusters
+    model.n_features_in_, model.n_features_out_ = 3, 2
+    source = rng.uniform(-1, 1, (n_points, 3))
+    tracemalloc.start()
+    try:
+        transferred = model.transfer(source)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20e6
+    rows = rng.choice(n_points, 200, replace=False)          # from many blocks
+    np.testing.assert_allclose(transferred[rows], per_point_transfer(
+        source[rows], model.responsibilities(source[rows]), model.coef_, model.intercept_),
+        rtol=1e-12, atol=1e-14)
+
+
+def test_clustering_columns_need_not_be_adjacent():
+    source, target = correspondences(300, seed=8)
+    lpa = LocalProcrustesAnalysis(n_min=7, c_min=1e-7, cluster_dims=[2, 0]).fit(source, target)
+    test_source = correspondences(500, seed=9)[0]
+    gamma = lpa.responsibilities(test_source)
+    np.testing.assert_array_equal(gamma, gmm.responsibilities(
+        test_source[:, [2, 0]], lpa.weights_, lpa.means_, lpa.precisions_cholesky_))
+    np.testing.assert_allclose(lpa.transfer(test_source), per_point_transfer(
+        test_source, gamma, lpa.coef_, lpa.intercept_), rtol=1e-12, atol=1e-14)
+
+
+def test_quadratic_features_are_the_upper_triangle_products():
+    X = np.random.default_rng(4).normal(size=(37, 5))
+    upper = np.triu_indices(5)
+    expected = np.hstack((X[:, upper[0]] * X[:, upper[1]], X))
+    assert np.array_equal(gmm.quadratic_features(X), expected)
+
+
+@pytest.mark.parametrize("simd_exp", [False, True])
+@pytest.mark.parametrize("live_share", [0.0, 0.05, 0.6, 1.0])
+def test_floored_exp_is_exp_of_the_clamped_values(live_share, simd_exp, monkeypatch):
+    monkeypatch.setattr(gmm, "_SIMD_EXP", simd_exp)      # both branches, whatever the CPU
+    rng = np.random.default_rng(5)
+    values = np.where(rng.random((50, 30)) < live_share, rng.uniform(-700, 0, (50, 30)),
+                      rng.uniform(-3000, -700, (50, 30)))
+    values[0, :3] = (-700.0, np.nextafter(-700.0, 0), 0.0)
+    expected = np.exp(np.maximum(values, -700.0))
+    assert np.array_equal(gmm._floored_exp(values.copy()), expected)
+    strided = np.asfortranarray(values)
+    assert np.array_equal(gmm._floored_exp(strided), expected)

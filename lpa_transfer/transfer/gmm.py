@@ -12,6 +12,7 @@ from lpa_transfer.transfer.procrustes import grouped_moments
 
 _LOG_2PI = np.log(2.0 * np.pi)
 _LOG_FLOOR = -700.0
+_EXP_FLOOR = np.exp(np.full(1, _LOG_FLOOR))[0]
 #: Work-array size per block of rows: small enough to stay in cache.
 _BLOCK_ELEMENTS = 1 << 17
 
@@ -40,9 +41,61 @@ def row_blocks(n_rows, row_elements):
 
 
 def quadratic_features(X):
-    """[x_i x_j for i <= j, x]: the (N, d(d+1)/2 + d) features of a quadratic form."""
-    upper = np.triu_indices(X.shape[1])
-    return np.hstack((X[:, upper[0]] * X[:, upper[1]], X))
+    """[x_i x_j for i <= j, x]: the (N, d(d+1)/2 + d) features of a quadratic form.
+
+    Returned column-major (a transposed view), built one contiguous column per product.
+    """
+    n_rows, dim = X.shape
+    columns = np.ascontiguousarray(X.T)
+    out = np.empty((dim * (dim + 1) // 2 + dim, n_rows))
+    start = 0
+    for i in range(dim):                                  # the order of np.triu_indices(dim)
+        np.multiply(columns[i], columns[i:], out=out[start:start + dim - i])
+        start += dim - i
+    out[start:] = columns
+    return out.T
+
+
+def _simd_exp():
+    """Whether numpy's float64 exp is SIMD code here: on x86-64 only with AVX512F, which
+    tools/env.sh masks for reproducible results. Otherwise numpy calls the C library's exp
+    element by element, which is slower still for large negative arguments."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__
+    except ImportError:                                   # numpy < 2
+        try:
+            from numpy.core._multiarray_umath import __cpu_features__
+        except ImportError:
+            return False
+    return bool(__cpu_features__.get("AVX512F"))
+
+
+_SIMD_EXP = _simd_exp()
+
+
+def _floored_exp(log_values):
+    """exp(max(v, -700)) in place, for the log-ratios v ≤ 0 of eq. 3.9 to their row's peak.
+
+    e^-700 ≈ 1e-304 is already negligible next to the peak's 1; clamping keeps exp out of
+    the denormal range, where it is much slower (bench/README.md). Far from its component a
+    point's entries sit at the floor; with a scalar exp (see :func:`_simd_exp`), when fewer
+    than half of the entries are above the floor, exp runs on those only (gathered by index)
+    and the others are set to e^-700. Both ways give the same bits: each entry is the same
+    exp of the same value.
+    """
+    if _SIMD_EXP or not log_values.flags.c_contiguous:
+        live = None
+    else:
+        live = log_values > _LOG_FLOOR
+    if live is None or 2 * np.count_nonzero(live) >= log_values.size:
+        np.maximum(log_values, _LOG_FLOOR, out=log_values)
+        return np.exp(log_values, out=log_values)
+    flat = log_values.reshape(-1)                                # a view (contiguous)
+    index = np.flatnonzero(live)
+    values = np.exp(flat.take(index))
+    flat.fill(_EXP_FLOOR)
+    flat.put(index, values)
+    return log_values
 
 
 class Responsibilities:
@@ -80,10 +133,7 @@ class Responsibilities:
             weighted += self.constant
             peak = weighted.max(axis=1, keepdims=True)
             weighted -= peak
-            # e^-700 ≈ 1e-304 is already negligible next to the peak's 1; clamping keeps exp
-            # out of the denormal range, where it is much slower (bench/README.md).
-            np.maximum(weighted, _LOG_FLOOR, out=weighted)
-            resp = np.exp(weighted, out=weighted)
+            resp = _floored_exp(weighted)
             total = resp.sum(axis=1, keepdims=True)
             resp /= total
             yield rows, resp, peak[:, 0] + np.log(total[:, 0])

@@ -17,6 +17,28 @@ from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 
 #: Responsibilities below this contribute less than double precision to eq. 3.12.
 _NEGLIGIBLE_RESPONSIBILITY = 1e-17
+#: Cost model behind the choice between the dense and the sparse path of
+#: :func:`mix_local_maps`, in multiply-adds of a large matrix product: the dense path costs
+#: (D_s + 1)·D_t + _DENSE_ENTRY_COST per (point, cluster) entry; the sparse path
+#: _SPARSE_PAIR_COST·(D_s + D_t + _SPARSE_PAIR_VALUES) per non-negligible pair (gathers,
+#: scatters and call overheads dominate it) plus _SPARSE_CLUSTER_COST per cluster each time
+#: it evaluates its collected pairs. Fitted to the crossovers that
+#: ``python -m bench.bench_lpa --crossover`` measures.
+_DENSE_ENTRY_COST = 120
+_SPARSE_PAIR_COST = 35
+_SPARSE_PAIR_VALUES = 40
+_SPARSE_CLUSTER_COST = 120_000
+#: Elements (points x clusters x target dimensions) of the dense path's work arrays.
+_BLOCK_ELEMENTS = 1 << 17
+#: Rows per matrix product of the dense path (fewer if the block is smaller).
+_DENSE_ROWS = 256
+#: Source and target values of the (point, cluster) pairs the sparse path gathers before it
+#: evaluates them: at least _SPARSE_ELEMENTS, more for many clusters so that there are about
+#: _SPARSE_PAIRS_PER_CLUSTER pairs per cluster (its per-cluster cost is then amortised), but
+#: never more than _SPARSE_MAX_ELEMENTS.
+_SPARSE_ELEMENTS = 1 << 21
+_SPARSE_PAIRS_PER_CLUSTER = 64
+_SPARSE_MAX_ELEMENTS = 1 << 23
 
 
 class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
@@ -147,29 +169,183 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         return self._responsibilities(check.as_transfer_input(self, source))
 
     def _responsibilities(self, source):
-        return gmm.responsibilities(source[:, self.cluster_dims_], self.weights_, self.means_,
+        return gmm.responsibilities(self._cluster_space(source), self.weights_, self.means_,
                                     self.precisions_cholesky_)
+
+    def _cluster_space(self, source):
+        """The clustering-space columns x_s of source points: a view when they are adjacent."""
+        dims = self.cluster_dims_
+        if np.array_equal(dims, np.arange(dims[0], dims[0] + len(dims))):
+            return source[:, dims[0]:dims[0] + len(dims)]
+        return source[:, dims]
 
     def transfer(self, source):
         """Map source points (M, D_s) to the target domain (M, D_t) (Alg. 4, eq. 3.12).
 
-        ẑ_t = Σ_k γ_k f_k(z_s). Terms with γ_k < 1e-17 (below double precision next to the
-        dominant γ ≥ 1/K) are skipped, so each local map f_k is evaluated only on the points
-        it is responsible for.
+        ẑ_t = Σ_k γ_k f_k(z_s) with f_k(z_s) = W_k z_s + b_k; terms with γ_k < 1e-17 (below
+        double precision next to the dominant γ ≥ 1/K) are skipped. Points are processed in
+        blocks; see :func:`mix_local_maps` for how each block is evaluated.
         """
         source = check.as_transfer_input(self, source)
-        gamma = self._responsibilities(source)
-        points, components = np.nonzero(gamma >= _NEGLIGIBLE_RESPONSIBILITY)
-        order = np.argsort(components, kind="stable")
-        points, components = points[order], components[order]
-        bounds = np.concatenate(([0], np.cumsum(np.bincount(components,
-                                                            minlength=self.n_clusters_))))
-        out = np.zeros((len(source), self.n_features_out_))
-        for k in np.flatnonzero(np.diff(bounds)):
-            rows = points[bounds[k]:bounds[k + 1]]
-            local = source[rows] @ self.coef_[k].T + self.intercept_[k]     # f_k(z_s)
-            out[rows] += gamma[rows, k, None] * local
-        return out
+        blocks = gmm.Responsibilities(self.weights_, self.means_, self.precisions_cholesky_)
+        gammas = ((rows, gamma) for rows, gamma, _ in blocks.blocks(self._cluster_space(source)))
+        return mix_local_maps(source, gammas, self.coef_, self.intercept_)
+
+
+def mix_local_maps(source, gamma_blocks, coef, intercept, path=None):
+    """ẑ_t = Σ_k γ_k (W_k z_s + b_k) (Alg. 4, eq. 3.12) for the rows of ``source`` (M, D_s).
+
+    ``gamma_blocks`` yields ``(rows, γ)`` in increasing row order: a slice of consecutive rows
+    and their responsibilities (R, K) (eq. 3.11). ``coef`` (K, D_t, D_s) and ``intercept``
+    (K, D_t) hold the local maps f_k. Terms with γ_k < 1e-17 are dropped. Each block takes
+    one of two paths, chosen by the share of its entries with γ_k ≥ 1e-17 against
+    :func:`dense_share` (``path`` "dense" or "sparse" forces one):
+
+    * sparse (responsibilities concentrated): the (point, k) pairs are collected over blocks
+      and each f_k is evaluated on its own points only, one matrix product per cluster
+      (:class:`_SparseTerms`);
+    * dense (responsibilities spread): all K maps are evaluated on every point of the block
+      by blocked matrix products and weighted by γ (:func:`_dense_block`).
+
+    Both add a point's terms in increasing k, as the plain per-point sum does (the dense path
+    group by group of clusters when K·D_t is large). They can differ in the last bits because
+    a BLAS product may round an entry differently depending on the shape of the product and
+    the entry's place in it. Work arrays stay near ``_BLOCK_ELEMENTS`` elements, and the
+    collected pairs within ``_SPARSE_MAX_ELEMENTS`` values, whatever M.
+    """
+    if path not in (None, "dense", "sparse"):
+        raise ValueError(f"path must be None, 'dense' or 'sparse', got {path!r}")
+    out = np.zeros((len(source), intercept.shape[1]))
+    sparse = _SparseTerms(source, coef, intercept, out)
+    stacked = None
+    crossover = dense_share(source.shape[1], intercept.shape[1], len(coef))
+    for rows, gamma in gamma_blocks:
+        kept = gamma >= _NEGLIGIBLE_RESPONSIBILITY
+        pairs = np.flatnonzero(kept) if path != "dense" else None
+        if path == "dense" or (path is None and len(pairs) >= crossover * kept.size):
+            if stacked is None:
+                stacked = _stacked_maps(coef, intercept)
+            _dense_block(source[rows], np.where(kept, gamma, 0.0), stacked, out[rows])
+        else:
+            sparse.add(rows, gamma, pairs)
+    sparse.flush()
+    return out
+
+
+def dense_share(n_source_dims, n_target_dims, n_clusters):
+    """The share of non-negligible responsibilities from which the dense path is used.
+
+    The dense path's cost grows with the number of (point, cluster) entries, the sparse
+    path's with the number of non-negligible ones; this is the share at which the two costs
+    of the module's cost model (``_DENSE_ENTRY_COST`` and ``_SPARSE_*_COST``) are equal.
+    Bigger local maps favour the sparse path (it evaluates fewer of them), more clusters the
+    dense path (the sparse path's per-cluster cost).
+    """
+    dense = (n_source_dims + 1) * n_target_dims + _DENSE_ENTRY_COST
+    pairs = _sparse_capacity(n_source_dims, n_target_dims, n_clusters)
+    sparse = (_SPARSE_PAIR_COST * (n_source_dims + n_target_dims + _SPARSE_PAIR_VALUES)
+              + _SPARSE_CLUSTER_COST * n_clusters / pairs)
+    return dense / sparse
+
+
+def _sparse_capacity(n_source_dims, n_target_dims, n_clusters):
+    """How many pairs the sparse path collects before it evaluates them."""
+    values = n_source_dims + n_target_dims
+    wanted = _SPARSE_PAIRS_PER_CLUSTER * n_clusters * values
+    return max(1, min(max(_SPARSE_ELEMENTS, wanted), _SPARSE_MAX_ELEMENTS) // values)
+
+
+def _stacked_maps(coef, intercept):
+    """The K local maps as one (D_s + 1, K·D_t) matrix [W_kᵀ; b_kᵀ], cluster after cluster."""
+    n_clusters, n_out, n_in = coef.shape
+    stacked = np.empty((n_in + 1, n_clusters * n_out))
+    stacked[:n_in] = coef.reshape(n_clusters * n_out, n_in).T
+    stacked[n_in] = intercept.reshape(-1)
+    return stacked
+
+
+def _dense_block(source, weights, stacked, out):
+    """out = Σ_k w_k (W_k z_s + b_k) for a block of rows, all K maps at once (eq. 3.12).
+
+    ``weights`` (R, K) are the responsibilities with the negligible ones set to 0 and
+    ``stacked`` comes from :func:`_stacked_maps`: [z_s, 1] @ stacked gives every f_k(z_s)
+    (the offset is the product's last term). Rows and clusters are split so that each
+    (rows, clusters, D_t) product stays near ``_BLOCK_ELEMENTS``; within a split the
+    weighted terms are summed in increasing k.
+    """
+    n_rows, n_clusters = weights.shape
+    n_in, n_out = source.shape[1], out.shape[1]
+    rows_step = max(1, min(n_rows, _DENSE_ROWS))
+    clusters_step = max(1, min(n_clusters, _BLOCK_ELEMENTS // (rows_step * n_out)))
+    augmented = np.empty((rows_step, n_in + 1))
+    augmented[:, n_in] = 1.0
+    for start in range(0, n_rows, rows_step):
+        rows = slice(start, min(start + rows_step, n_rows))
+        points = augmented[:rows.stop - start]
+        points[:, :n_in] = source[rows]
+        for first in range(0, n_clusters, clusters_step):
+            last = min(first + clusters_step, n_clusters)
+            local = points @ stacked[:, first * n_out:last * n_out]        # f_k(z_s), k in split
+            local = local.reshape(len(points), last - first, n_out)
+            terms = np.einsum("rk,rkt->rt", weights[rows, first:last], local)
+            if first == 0:
+                out[rows] = terms
+            else:
+                out[rows] += terms
+
+
+class _SparseTerms:
+    """The sparse path of :func:`mix_local_maps`: the (point, k) pairs with γ_k ≥ 1e-17.
+
+    Pairs are collected block by block and evaluated once about ``_SPARSE_ELEMENTS`` source
+    and target values have gathered (and at the end): sorted by cluster, each f_k is one
+    matrix product over its points. The clusters are taken in increasing k, so each point's
+    weighted terms reach its row in increasing k: the first is assigned, the others added.
+    """
+
+    def __init__(self, source, coef, intercept, out):
+        self.source, self.coef, self.intercept, self.out = source, coef, intercept, out
+        self.capacity = _sparse_capacity(source.shape[1], intercept.shape[1], len(coef))
+        self.pending, self.size = [], 0
+
+    def add(self, rows, gamma, pairs):
+        """Collect the pairs of a block: ``rows`` (a slice), γ (R, K) and ``pairs``, the flat
+        indices of γ's entries ≥ 1e-17 (point-major, so increasing k within a point)."""
+        if len(pairs) == 0:
+            return
+        points, components = np.divmod(pairs, gamma.shape[1])
+        self.pending.append((points + rows.start, components, gamma.reshape(-1)[pairs]))
+        self.size += len(pairs)
+        if self.size >= self.capacity:
+            self.flush()
+
+    def flush(self):
+        """Evaluate the collected pairs and write their terms to their points' rows of ``out``."""
+        if not self.pending:
+            return
+        points, components, gamma = (np.concatenate(parts) for parts in zip(*self.pending))
+        self.pending, self.size = [], 0
+        first = np.ones(len(points), dtype=bool)          # a point's pair with the smallest k
+        first[1:] = points[1:] != points[:-1]
+        n_clusters = len(self.coef)
+        # A stable sort by cluster (a radix sort for 16-bit keys). The clusters are then taken
+        # in increasing k, so each point's terms are added in increasing k.
+        keys = components.astype(np.int16) if n_clusters <= np.iinfo(np.int16).max else components
+        order = np.argsort(keys, kind="stable")
+        bounds = np.searchsorted(components[order], np.arange(n_clusters + 1))
+        points, gamma, first = points[order], gamma[order], first[order]
+        for k in np.flatnonzero(bounds[1:] > bounds[:-1]):
+            block = slice(bounds[k], bounds[k + 1])
+            rows = points[block]                              # each point at most once
+            local = self.source.take(rows, axis=0) @ self.coef[k].T       # f_k(z_s)
+            local += self.intercept[k]
+            local *= gamma[block, None]
+            lead = first[block]
+            if lead.all():
+                self.out[rows] = local
+            else:
+                self.out[rows[lead]] = local[lead]
+                self.out[rows[~lead]] += local[~lead]
 
 
 def _cluster_members(space, weights, means, precisions, n_min):
