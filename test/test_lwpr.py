@@ -1,15 +1,21 @@
-"""LWPR (lpa_transfer.learners.lwpr): learning, receptive-field bookkeeping, API and input checks.
+"""LWPR (lpa_transfer.learners.lwpr): learning, receptive-field bookkeeping, API and input checks,
+and equality with the frozen numpy implementation (bench/reference_lwpr.py) that the compiled
+kernels replaced.
 
 Accuracy thresholds were measured with the seeds used here and on two further seeds and have
 a margin above the worst of them (noted next to each). nMSE = MSE / variance of the
 noise-free targets on a held-out grid. Everything is seeded; the learner is deterministic.
 """
+import functools
+import importlib.util
+
 import numpy as np
 import pytest
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 from sklearn.utils.estimator_checks import check_estimator
 
+from conftest import ROOT
 from lpa_transfer.learners.lwpr import LWPR
 
 #: The 2-D "cross" function of the LWPR paper (Vijayakumar et al. 2005) and reference library.
@@ -306,3 +312,124 @@ def test_scikit_learn_estimator_checks():
     results = check_estimator(LWPR(init_D=1.0), on_fail=None,
                               expected_failed_checks=expected_failures)
     assert [r["check_name"] for r in results if r["status"] == "failed"] == []
+
+
+# ----------------------------------------------------------------- equality with the reference
+@functools.cache
+def reference_lwpr():
+    """The frozen numpy LWPR of bench/reference_lwpr.py (loaded by path: bench/ is not on
+    the test path under every runner)."""
+    spec = importlib.util.spec_from_file_location("reference_lwpr",
+                                                  ROOT / "bench" / "reference_lwpr.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.LWPR
+
+
+#: rtol of the equality checks. The kernels repeat the reference's operations in its order
+#: per RF; only sums that numpy leaves to SIMD loops or BLAS round differently.
+RTOL = 1e-9
+#: Learned arrays compared per output (receptive_fields_ keys).
+ARRAYS = ("c", "x0", "D", "M", "beta0", "beta", "U", "P", "n_projections", "n_data",
+          "trustworthy")
+
+
+def assert_close(actual, expected, what):
+    """rtol RTOL; an absolute floor of 1e-12 of the array's scale for entries that are zero
+    up to rounding (e.g. PLS directions orthogonal to an input)."""
+    expected = np.asarray(expected)
+    scale = float(np.abs(expected).max()) if expected.size and expected.dtype != bool else 1.0
+    np.testing.assert_allclose(actual, expected, rtol=RTOL, atol=1e-12 * max(scale, 1e-300),
+                               err_msg=what)
+
+
+def sine_data(n, seed):
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-np.pi, np.pi, (n, 1))
+    return x, np.sin(2 * x[:, 0]) + 0.1 * rng.standard_normal(n)
+
+
+def three_outputs(n, seed):
+    X, y = cross_data(n, seed)
+    return X, np.column_stack((y, np.sin(3 * X[:, 0]) * X[:, 1], 2.0 * X[:, 0] - X[:, 1]))
+
+
+def six_scales(n, seed):
+    """y = Σ x_i / s_i with scales s_i = 2^-i (the projection test): adds projections."""
+    scales = 0.5 ** np.arange(6)
+    X = np.random.default_rng(seed).standard_normal((n, 6)) * scales
+    return X, (X / scales).sum(axis=1)
+
+
+EQUALITY_CASES = {
+    "sine": (sine_data, 1000, dict(init_D=4.0, norm_in=1.0)),
+    "cross": (cross_data, 1500, CROSS),
+    "cross, meta": (cross_data, 1500, dict(CROSS, meta=True)),
+    "cross, full metric": (cross_data, 1000, dict(CROSS, diag_only=False)),
+    "cross, full metric, meta": (cross_data, 1000,
+                                 dict(CROSS, diag_only=False, meta=True, norm_out=1.0)),
+    "cross, pruning": (cross_data, 800, dict(init_D=25.0, w_gen=0.4, w_prune=0.5,
+                                             norm_in=1.0)),
+    "cross, pruning, fixed metrics": (cross_data, 800, dict(init_D=25.0, w_gen=0.4,
+                                                            w_prune=0.5, update_D=False,
+                                                            norm_in=1.0)),
+    "3 outputs": (three_outputs, 600, CROSS),
+    "3 outputs, pruning, meta": (three_outputs, 600, dict(CROSS, w_gen=0.4, w_prune=0.5,
+                                                          meta=True)),
+    "3 outputs, full metric, meta": (three_outputs, 400, dict(CROSS, diag_only=False,
+                                                              meta=True)),
+    "6 inputs, added projections": (six_scales, 1500, dict(init_D=0.01, update_D=False,
+                                                           norm_in=1.0, add_threshold=0.95)),
+}
+
+
+@pytest.mark.parametrize("case", list(EQUALITY_CASES))
+def test_equals_the_reference_implementation(case):
+    """The compiled LWPR reproduces bench/reference_lwpr.py: the predictions made while
+    learning online (update), the final predictions and confidences, the number of
+    receptive fields, the pruning counts and the learned arrays of every field, to RTOL."""
+    data, n, params = EQUALITY_CASES[case]
+    X, Y = data(n + 1, seed=21)
+    queries = X_GRID if X.shape[1] == 2 else data(200, seed=22)[0]
+    models = [learner(**params) for learner in (LWPR, reference_lwpr())]
+    online = []
+    for model in models:
+        model.partial_fit(X[:n // 2], Y[:n // 2])             # norm_* from the first half
+        online.append([model.update(x, y) for x, y in zip(X[n // 2:], Y[n // 2:])])
+    new, ref = models
+    assert_close(np.array(online[0]), np.array(online[1]), "update's predictions")
+    np.testing.assert_array_equal(new.n_receptive_fields_, ref.n_receptive_fields_)
+    np.testing.assert_array_equal(new.n_pruned_, ref.n_pruned_)
+    assert ("pruning" in case) == bool(ref.n_pruned_.any())
+    assert_close(new.predict(queries), ref.predict(queries), "predict")
+    for got, want in zip(new.predict_with_confidence(queries[::7]),
+                         ref.predict_with_confidence(queries[::7])):
+        assert_close(got, want, "predict_with_confidence")
+    for j, (got, want) in enumerate(zip(new.receptive_fields_, ref.receptive_fields_)):
+        for name in ARRAYS:
+            assert got[name].shape == want[name].shape, (j, name)
+            assert_close(got[name], want[name], f"output {j}: {name}")
+    if case.startswith("6 inputs"):
+        assert ref.receptive_fields_[0]["n_projections"].tolist() == [3]
+
+
+def test_equals_the_reference_with_15_inputs_and_5_outputs():
+    """The benchmark's shape in small: 15 inputs -> 5 outputs, one 3-s trajectory repeated
+    with noise (as repeated trials), so that fields become trustworthy; online update."""
+    rng = np.random.default_rng(23)
+    t = np.arange(300)[:, None] * 0.01
+    task = np.sin(2 * np.pi * rng.uniform(0.2, 1.0, 15) * t + rng.uniform(0, 2 * np.pi, 15))
+    X = np.vstack([task + 0.02 * rng.standard_normal(task.shape) for _ in range(5)])
+    Y = np.column_stack([np.tanh(X[:, i:i + 3].sum(axis=1)) for i in range(0, 15, 3)])
+    models = [learner(init_D=10.0, init_alpha=0.01).fit(X[:1200], Y[:1200])
+              for learner in (LWPR, reference_lwpr())]
+    new, ref = models
+    assert ref.receptive_fields_[0]["trustworthy"].mean() > 0.9      # 57 of 58
+    online = [np.array([model.update(x, y) for x, y in zip(X[1200:], Y[1200:])])
+              for model in models]
+    assert_close(online[0], online[1], "update's predictions")
+    np.testing.assert_array_equal(new.n_receptive_fields_, ref.n_receptive_fields_)
+    assert_close(new.predict(X[::5]), ref.predict(X[::5]), "predict")
+    for got, want in zip(new.receptive_fields_, ref.receptive_fields_):
+        for name in ARRAYS:
+            assert_close(got[name], want[name], name)

@@ -104,4 +104,27 @@ if ! up_to_date project "$proj_hash"; then
     did_something=1
 fi
 
+# 7. LWPR's compiled kernels (numba), compiled once here and cached on disk next to their
+# module, so that the first learner node does not stall compiling them. Redone when the
+# kernels or the requirements change.
+kernels=lpa_transfer/learners/_lwpr_kernels.py
+kernel_hash=$( (echo "$req_hash"; sha256sum "$kernels") | digest)
+if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1; then
+    say "compiling LWPR's kernels (numba, about 20 s)"
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$VENV/bin/python" - <<'PY'
+import numpy as np
+from lpa_transfer.learners.lwpr import LWPR
+rng = np.random.default_rng(0)
+for params in ({}, {"meta": True, "diag_only": False}):
+    X, Y = rng.uniform(-1, 1, (60, 2)), rng.uniform(-1, 1, (60, 2))
+    model = LWPR(**params).fit(X, Y)
+    model.partial_fit(X[:5], Y[:5])
+    model.update(X[0], Y[0])
+    model.predict(X)
+    model.predict_with_confidence(X)
+PY
+    mark_done kernels "$kernel_hash"
+    did_something=1
+fi
+
 if [[ -n $did_something ]]; then say "done ($VENV)"; else say "up to date ($VENV)"; fi
