@@ -167,6 +167,9 @@ class RobotSimulator:
             array.setflags(write=False)
         self._drives = self.control_mode == "torque" and (
             (self.armature > 0).any() or (self.joint_damping > 0).any())
+        # _drive_torques' constants, computed once: diag(A + D·Δt) and a zero acceleration
+        self._drive = np.diag(self.armature + self.joint_damping * self.physics_step)
+        self._zero_accel = [0.0] * len(self._joints)
         if self._drives:   # damping implicitly in _drive_torques instead (module docstring)
             for joint in self._joints:
                 p.changeDynamics(self._body, joint, jointDamping=0.0, physicsClientId=cid)
@@ -193,10 +196,10 @@ class RobotSimulator:
         states = p.getJointStates(body, self._joints, physicsClientId=cid)
         q, qd = [s[0] for s in states], [s[1] for s in states]
         mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
-        bias = np.array(p.calculateInverseDynamics(body, q, qd, [0.0] * self.n_joints,
+        bias = np.array(p.calculateInverseDynamics(body, q, qd, self._zero_accel,
                                                    physicsClientId=cid))
-        drive = np.diag(self.armature + self.joint_damping * self.physics_step)
-        accel = np.linalg.solve(mass + drive, torques - self.joint_damping * np.asarray(qd) - bias)
+        accel = np.linalg.solve(mass + self._drive,
+                                torques - self.joint_damping * np.asarray(qd) - bias)
         return mass @ accel + bias
 
     @property
