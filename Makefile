@@ -16,7 +16,7 @@ test:
 	bash tools/run_tests.sh $(ARGS)
 
 bench: setup
-	bash -c 'source tools/env.sh && exec python -m bench.bench_lpa "$$@"' bench $(ARGS)
+	bash -c 'source tools/env.sh && exec python -m bench.table "$$@"' bench $(ARGS)
 
 ch3:         # thesis Fig. 3-6 and 3-8 (library only), into runs/two_link_fk/
 	$(PY) scenarios/two_link_fk/run_two_link_fk.py $(ARGS)
