@@ -30,10 +30,20 @@ INTERACTIVE_DOMAIN_ID = 42   # tools/env.sh's default: scenario runs started by 
 
 
 def unique_domain_id():
-    """A ROS domain id (1..100) unlikely to clash with other test processes on this host, and
-    never the interactive default, so tests do not talk to a scenario running meanwhile."""
+    """A ROS domain id unlikely to clash with other test processes on this host, and never the
+    interactive default, so tests do not talk to a scenario running meanwhile.
+
+    Under pytest-xdist each worker (``PYTEST_XDIST_WORKER`` = gw0, gw1, ...) draws from its own
+    band of 1..200, so two workers never share a domain; otherwise the id mixes in the pid.
+    """
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
     while True:
-        domain_id = 1 + (os.getpid() * 7 + next(_DOMAINS)) % 100
+        if worker.startswith("gw"):
+            count = max(1, int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")))
+            band = 200 // count
+            domain_id = 1 + int(worker[2:]) % count * band + next(_DOMAINS) % band
+        else:
+            domain_id = 1 + (os.getpid() * 7 + next(_DOMAINS)) % 100
         if domain_id != INTERACTIVE_DOMAIN_ID:
             return domain_id
 

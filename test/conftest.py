@@ -1,4 +1,5 @@
 """Shared fixtures. The library is installed editable (tools/setup.sh), so no sys.path edits."""
+import random
 import subprocess
 import sys
 from pathlib import Path
@@ -7,6 +8,18 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 VENV = ROOT / ".venv"
+
+
+def pytest_addoption(parser):
+    parser.addoption("--shuffle", type=int, default=None, metavar="SEED",
+                     help="run the tests in an order shuffled with SEED: every test must pass "
+                          "alone and in any order")
+
+
+def pytest_collection_modifyitems(config, items):
+    seed = config.getoption("--shuffle")
+    if seed is not None:
+        random.Random(seed).shuffle(items)
 
 
 @pytest.fixture

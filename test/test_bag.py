@@ -5,10 +5,10 @@ import pytest
 
 from lpa_transfer.recording import bag
 
-rclpy_serialization = pytest.importorskip("rclpy.serialization")
-from sensor_msgs.msg import JointState  # noqa: E402  (after the skip: needs the ROS wheels)
+import rclpy.serialization as rclpy_serialization
+from sensor_msgs.msg import JointState
 
-from lpa_transfer_interfaces.msg import CorrespondenceSample, Matrix  # noqa: E402
+from lpa_transfer_interfaces.msg import CorrespondenceSample, Matrix
 
 SEPARATOR = "=" * 80
 Decoded = namedtuple("Decoded", "topic type_name ros_msg")  # one message as mcap_ros2 decodes it

@@ -9,12 +9,11 @@ import pytest
 from conftest import ROOT
 from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
-rclpy = pytest.importorskip("rclpy")
-from lpa_transfer.robots.kinematics import planar_forward_kinematics  # noqa: E402
-from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation  # noqa: E402
-from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor  # noqa: E402
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation
+from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
+from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+from sensor_msgs.msg import JointState
 
 TARGET = ROOT / "scenarios" / "robots" / "goal_babbling_target.toml"
 LINKS = (0.7, 0.4)

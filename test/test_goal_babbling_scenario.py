@@ -41,6 +41,11 @@ def test_every_condition_is_evaluated_on_the_learning_clock(smoke_run):
     assert guarded[-1] < guarded[0] <= 600
     scratch = curves["scratch"][0]
     assert scratch["mean_error"][-1] < scratch["mean_error"][0]   # babbling learns
+    # Transfer helps early (measured at 20 s: mean error scratch 117 mm, PA 55, LPA 93; reaching
+    # rate scratch 2.4 %, PA 11.0 %, LPA 4.9 %).
+    for name in CONDITIONS[1:]:
+        assert curves[name][0]["mean_error"][0] < scratch["mean_error"][0], name
+        assert curves[name][0]["rate"][0] > scratch["rate"][0], name
     with open(smoke_run / "learning_curves.csv") as handle:
         assert len(list(csv.DictReader(handle))) == 5 * 3
 
@@ -113,6 +118,10 @@ def test_nao_poppy_transfers_nao_experience_after_guided_exploration(nao_poppy_r
     assert curves["LPA/T20"][0]["n_transferred"] == [160] * 3
     guarded = curves["LPA-guarded/T20"][0]["n_transferred"]
     assert guarded[-1] <= guarded[0] <= 160
+    # Nao's experience lowers Poppy's mean error at every evaluation (measured: 129/109/102 mm
+    # against scratch's 154/148/144 mm)
+    for name in NAO_POPPY[1:]:
+        assert all(np.less(curves[name][0]["mean_error"], curves["scratch"][0]["mean_error"]))
     assert "nao_right_arm -> poppy_right_arm" in (nao_poppy_run / "report.txt").read_text()
 
 

@@ -23,7 +23,6 @@ from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_nodes.testing import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
                          unique_domain_id, wait_until)
 
-rclpy = pytest.importorskip("rclpy")
 
 ROBOTS = {side: ROOT / "scenarios" / "robots" / f"goal_babbling_{side}.toml"
           for side in ("source", "target")}

@@ -7,17 +7,18 @@ import pytest
 from conftest import ROOT
 from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
-rclpy = pytest.importorskip("rclpy")
-from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
-from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials  # noqa: E402
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402
+from lpa_transfer_interfaces.msg import TrialResult
+from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
+from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
 
 PINCHER = ROOT / "scenarios" / "robots" / "pincher_arm.toml"
 CENTRE_POSE = "[0.0, 0.6, 0.9, 0.6]"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def learner(tmp_path_factory):
+    """A fresh graph per test: a learner's clock, trial count and model are what the tests
+    before it left, so a shared one would make the tests depend on their order."""
     work = tmp_path_factory.mktemp("learner")
     domain_id = unique_domain_id()
     namespace = ["-r", "__ns:=/pincher"]

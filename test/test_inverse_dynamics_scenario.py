@@ -41,6 +41,11 @@ def test_every_condition_learns_on_both_robots(smoke_run):
         # own babbling data near the task (random) starts better than nothing (measured:
         # youBot 7.2 vs 13.0 mm, Pincher 3.5 vs 5.6 mm)
         assert curves[f"{robot}/star1/random"][0][0] < scratch[0]
+        # so does the other robot's experience, transferred (measured trial 1: youBot scratch
+        # 13.4, transfer-PA 9.7, transfer-LPA 10.8, own+transfer-PA 8.9 mm; Pincher 6.1, 3.7,
+        # 3.6, 3.9 mm)
+        for condition in CONDITIONS[2:]:
+            assert curves[f"{robot}/star1/{condition}"][0][0] < 0.9 * scratch[0], condition
     with open(smoke_run / "learning_curves.csv") as handle:
         assert len(list(csv.DictReader(handle))) == 2 * 6 * 2
     traces = results["traces"]["youbot/star1"]

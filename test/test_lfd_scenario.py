@@ -11,13 +11,16 @@ from conftest import ROOT
 from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer_nodes.testing import run_scenario
 
-rclpy = pytest.importorskip("rclpy")
-from rclpy.serialization import deserialize_message  # noqa: E402
-from lpa_transfer_interfaces.msg import (CorrespondenceBatch, Demonstration,  # noqa: E402
+from rclpy.serialization import deserialize_message
+from lpa_transfer_interfaces.msg import (CorrespondenceBatch, Demonstration,
                                          SkillReproduction)
 
 SCENARIO = ROOT / "scenarios" / "lfd"
 ROBOTS = ("pr2_right_arm", "meka_right_arm")
+# m, measured (test docstrings): mapping, transferred encoding and the IK method's encoding
+MAPPING_ERROR = {"pr2_right_arm": 0.0131, "meka_right_arm": 0.0043}
+ENCODING_ERROR = {"pr2_right_arm": 0.0139, "meka_right_arm": 0.0056}
+IK_ENCODING_ERROR = {"pr2_right_arm": 0.0035, "meka_right_arm": 0.0033}
 
 
 @pytest.fixture(scope="module")
@@ -40,11 +43,13 @@ def test_both_robots_learn_the_letters(smoke_run):
     assert sorted(results) == sorted(ROBOTS)
     for name, r in results.items():
         assert r["pairs"] == 1500 and r["babbled"] >= 1500 and r["clusters"] > 1
-        assert 0 < r["mapping_error"] < 0.05, name
+        # within 30 % of the measured mapping error (other hosts' rounding)
+        assert 0.7 * MAPPING_ERROR[name] < r["mapping_error"] < 1.3 * MAPPING_ERROR[name], name
         assert sorted(r["transferred_encoding_by_shape"]) == ["LShape", "Zshape"]
         # the robot's own IK executed through its DMP tracks the letters closely
-        assert r["ik_method_encoding_error"] < 0.01, name
-        assert r["ik_method_encoding_error"] < r["transferred_encoding_error"] < 0.06, name
+        assert r["ik_method_encoding_error"] < 1.3 * IK_ENCODING_ERROR[name], name
+        assert r["ik_method_encoding_error"] < r["transferred_encoding_error"], name
+        assert r["transferred_encoding_error"] < 1.3 * ENCODING_ERROR[name], name
     report = (smoke_run / "report.txt").read_text()
     assert "IK method" in report and all(name in report for name in ROBOTS)
     assert (smoke_run / "fig4_11_13_letters.png").stat().st_size > 10_000

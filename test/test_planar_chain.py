@@ -5,9 +5,9 @@ import tempfile
 import numpy as np
 import pytest
 
-p = pytest.importorskip("pybullet")
+import pybullet as p
 
-from lpa_transfer.robots.planar_chain import (GRAVITY, babbling_trajectory, inverse_dynamics,  # noqa: E402
+from lpa_transfer.robots.planar_chain import (GRAVITY, babbling_trajectory, inverse_dynamics,
                                               inverse_dynamics_babbling, planar_chain_urdf)
 
 LENGTHS, MASSES = (0.3, 0.25, 0.2), (1.5, 1.0, 0.5)

@@ -7,13 +7,12 @@ import pytest
 from lpa_transfer.recording import bag
 from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
 
-rclpy = pytest.importorskip("rclpy")
-from rclpy.duration import Duration  # noqa: E402
-from rclpy.qos import QoSProfile  # noqa: E402
-from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
-from sensor_msgs.msg import JointState  # noqa: E402
+from rclpy.duration import Duration
+from rclpy.qos import QoSProfile
+from rclpy.serialization import deserialize_message, serialize_message
+from sensor_msgs.msg import JointState
 
-from lpa_transfer_interfaces.msg import CorrespondenceSample  # noqa: E402
+from lpa_transfer_interfaces.msg import CorrespondenceSample
 
 JOINT_STATES, SAMPLES = 500, 40
 RELIABLE_1000 = QoSProfile(depth=1000)
@@ -101,10 +100,10 @@ def test_player_replays_samples_in_order(ros_node, tmp_path):
         input=path, rate=0.0, topics="['/samples']", remap="['/samples:=/replayed']",
         start_delay=0.0, wait_for_subscribers=1))
     try:
-        deadline = time.monotonic() + 20
-        while player.alive() and time.monotonic() < deadline:
-            test.spin_for(0.1)
-        test.spin_for(0.3)
+        # the player ends by itself once it has published the bag
+        test.spin_until(lambda: not player.alive(), timeout=20, what="the player to finish")
+        test.spin_until(lambda: len(received) >= SAMPLES, timeout=10,
+                        what=f"all {SAMPLES} replayed samples")
     finally:
         assert player.stop() == 0, player.log()
     assert [(m.index, list(m.source), list(m.target)) for m in received] == [

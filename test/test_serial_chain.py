@@ -4,15 +4,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-p = pytest.importorskip("pybullet")
+import pybullet as p
 
-from lpa_transfer.robots.kinematics import planar_forward_kinematics  # noqa: E402
-from lpa_transfer.robots.planar_chain import inverse_dynamics, load_fixed_robot  # noqa: E402
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
-from lpa_transfer.robots.serial_chain import (chain_frames, forward_kinematics, matrix_rpy,  # noqa: E402
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.planar_chain import inverse_dynamics, load_fixed_robot
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.serial_chain import (chain_frames, forward_kinematics, matrix_rpy,
                                               rpy_matrix, serial_chain_urdf, tool_transforms,
                                               urdf_joint_armatures)
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf  # noqa: E402
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 ROBOTS = Path(__file__).resolve().parents[1] / "scenarios" / "robots"
 #: pybullet reports link positions in single precision (getLinkState of a link at x = 0.3 m

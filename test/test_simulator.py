@@ -4,12 +4,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("pybullet")
 
-from lpa_transfer.robots.kinematics import planar_forward_kinematics  # noqa: E402
-from lpa_transfer.robots.planar_chain import planar_chain_urdf  # noqa: E402
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf  # noqa: E402
+from lpa_transfer.robots.kinematics import planar_forward_kinematics
+from lpa_transfer.robots.planar_chain import planar_chain_urdf
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 SOURCE = load_robot_params(Path(__file__).resolve().parents[1] / "scenarios" / "robots"
                            / "two_link_source.toml")

@@ -3,7 +3,6 @@ import json
 import os
 import signal
 import subprocess
-import time
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +11,7 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer.transfer.model_store import ModelStore
-from lpa_transfer_nodes.testing import run_scenario, unique_domain_id, wait_until
+from lpa_transfer_nodes.testing import PairListener, run_scenario, unique_domain_id
 
 SCENARIO = ROOT / "scenarios" / "two_link_graph"
 MODEL_ID = "two_link_source->two_link_target"
@@ -85,10 +84,12 @@ def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
     script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                               start_new_session=True, preexec_fn=_default_sigint)
-    collector_log = out / "logs" / "correspondence_collector.log"
-    wait_until(lambda: collector_log.exists() and "babbling" in collector_log.read_text(),
-               timeout=60, what="the collection to start")
-    time.sleep(1.0)
+    listener = PairListener(int(env["ROS_DOMAIN_ID"]))
+    try:   # interrupted once pairs were made, however fast the host
+        listener.spin_until(lambda: len(listener.samples) >= 3, timeout=60,
+                            what="the first correspondences")
+    finally:
+        listener.close()
     os.killpg(script.pid, signal.SIGINT)
     _, stderr = script.communicate(timeout=60)
     assert script.returncode == 130, stderr
@@ -103,15 +104,17 @@ def test_a_run_past_its_time_limit_stops_every_node_and_finalises_the_bag(tmp_pa
     """run_scenario's time limit (which the scenario tests rely on) ends the script the way
     its trap handles: no node of the run is left behind, and the bag is readable."""
     out = tmp_path / "run"
-    # The full configuration (400 settled pairs, then 1000 experience samples; about 35 s,
-    # README) is still collecting after 12 s; the smoke configuration (17 s here) ended
-    # inside the limit on a faster host.
+    # 20,000 lines x 5 samples x 0.4 s: 40,000 simulated seconds, which no host collects
+    # within the limit, so the limit always strikes mid-collection.
+    endless = tmp_path / "endless.yaml"
+    endless.write_text("correspondence_collector:\n  ros__parameters:\n    n_segments: 20000\n")
     try:
-        result = run_scenario(SCENARIO, out, config="config.yaml", timeout=12)
+        result = run_scenario(SCENARIO, out, config="config.yaml", timeout=20,
+                              overrides=[endless])
     except subprocess.TimeoutExpired as timeout:
         stderr = timeout.stderr
     else:
-        pytest.fail(f"the run ended within its 12 s limit (exit {result.returncode}); "
+        pytest.fail(f"the run ended within its 20 s limit (exit {result.returncode}); "
                     f"stderr:\n{result.stderr[-3000:]}")
     assert "interrupted: stopping the nodes" in stderr
     left = [pid for pid in os.listdir("/proc") if pid.isdigit() and _cmdline_holds(pid, out)]

@@ -5,5 +5,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$ROOT/tools/setup.sh"
 source "$ROOT/tools/env.sh"
 cd "$ROOT"
-# setup.cfg sets testpaths = test, so with no arguments the whole suite runs.
-exec python -m pytest "$@"
+# setup.cfg sets testpaths = test, so with no arguments the whole suite runs, and prints the
+# 15 slowest tests. Two workers (TEST_WORKERS=0 runs in this process); each test file stays on
+# one worker, which starts its module fixtures (the scenario runs) once.
+exec python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile "$@"
