@@ -7,7 +7,12 @@ source_robot:=scenarios/robots/two_link_source.toml -p target_robot:=... -p outp
 What it does (:func:`lpa_transfer.exploration.correspondences.collect_correspondences`): drives
 both robots through one seeded babbling program over their ``StepRobot`` services, pairs their
 samples by ``pairing_rule``, publishes every pair as it is made, saves the set, asks the
-mapping service to fit a model on it, and exits (0 on success). SIGINT/SIGTERM stop the
+mapping service to fit a model on it, and exits (0 on success). Pairs are made true for any
+robot pair: a commanded robot is stepped until it has settled (by its state, at least
+``steps_per_sample`` steps) and every pair is checked under its rule
+(:class:`~lpa_transfer.exploration.correspondences.PairCheck`); failing pairs are dropped or
+retried, and a set with too many ends the run with one FATAL line naming the robots, the rule
+and the residual. Before the fit it logs the model's k-fold held-out error beside PA's. SIGINT/SIGTERM stop the
 babbling early: the pairs made so far are published and saved (``complete = False`` in the
 file) and no model is fitted. Because the robots are stepped in lock-step, a run takes as
 long as the computation, and the same parameters give the same pairs, bit for bit.
@@ -32,16 +37,20 @@ from rclpy.parameter import Parameter
 from lpa_transfer.exploration.babbling import BabblingProgram, box_around
 from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.control import PID, start_servo
-from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, check_features,
+from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, PairCheck,
+                                                      check_features, pair_check_line,
                                                       check_guided_exploration, check_pairing_rule,
                                                       collect_correspondences,
                                                       collect_guided_correspondences)
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
-from lpa_transfer._validation import check_x_bounds
+from lpa_transfer._validation import check_int, check_x_bounds
 from lpa_transfer.robots.environment import stepped_environment
 from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
+from lpa_transfer.transfer.cross_validation import held_out_nmse
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
+from lpa_transfer_nodes.lpa_mapping import fit_hyperparameters
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, array_parameter, call_service,
                                           robot_resetter, robot_stepper, run_job, sim_stamp,
                                           to_matrix, wait_for_services, wait_for_subscribers)
@@ -91,7 +100,17 @@ class CorrespondenceCollector(Node):
         n_segments, samples_per_segment = (declare("n_segments", 20),
                                            declare("samples_per_segment", 5))
         task_low, task_high = tuple(doubles("task_low")), tuple(doubles("task_high"))
+        # the minimum a sample; settling by state and the pairing check (PairCheck) go on
         self.steps_per_sample = declare("steps_per_sample", 400)
+        defaults = PairCheck()
+        self.pair_check = PairCheck(
+            max_settle_steps=declare("max_settle_steps", defaults.max_settle_steps),
+            check_steps=declare("settle_check_steps", defaults.check_steps),
+            velocity_tol=float(declare("settle_velocity_tol", defaults.velocity_tol)),
+            position_tol=float(declare("settle_position_tol", defaults.position_tol)),
+            tolerance=float(declare("pair_tolerance", defaults.tolerance)),
+            on_bad_pair=declare("on_bad_pair", defaults.on_bad_pair),
+            max_bad_share=float(declare("max_bad_share", defaults.max_bad_share)))
         self.task_offset = doubles("task_offset") or None
         features = array_parameter(self, "features")
         self.guided = program == GUIDED
@@ -107,6 +126,10 @@ class CorrespondenceCollector(Node):
         self.fit_fields["cluster_dims"] = array_parameter(self, "cluster_dims",
                                                           Parameter.Type.INTEGER_ARRAY)
         self.fit_fields["random_state"] = declare("random_state", 0)
+        # k-fold held-out error of the model (and of PA) on the pairs, before the fit; 0: off
+        self.cross_validation_folds = declare("cross_validation_folds", 5)
+        if self.cross_validation_folds:
+            check_int(self.cross_validation_folds, "cross_validation_folds", 2)
         self.wait_for_subscribers = declare("wait_for_subscribers", 0)
         self.subscribed_topics = array_parameter(self, "wait_for_subscribed_topics")
         self.wait_timeout = float(declare("wait_timeout", 30.0))
@@ -195,12 +218,37 @@ class CorrespondenceCollector(Node):
                                   target_robot=pairs.target_robot,
                                   pairing_rule=pairs.pairing_rule,
                                   source=to_matrix(pairs.source), target=to_matrix(pairs.target))
+        meta = pairs.metadata
+        if "pairs_checked" in meta:
+            msg.pairs_checked, msg.pairs_dropped = meta["pairs_checked"], meta["pairs_dropped"]
+            msg.worst_residual = float(meta["worst_residual"])
+            msg.pair_tolerance = float(meta["pair_tolerance"])
+            msg.residual_unit = meta["residual_unit"]
         msg.header.stamp = sim_stamp(self.sim_time)
         self.batch_pub.publish(msg)
 
+    def fit_request(self, pairs):
+        return FitModel.Request(model_id=self.model_id, source=to_matrix(pairs.source),
+                                target=to_matrix(pairs.target), **self.fit_fields)
+
+    def held_out(self, pairs):
+        """The k-fold held-out nMSE of the model the service will fit, and of PA (metadata)."""
+        hyperparameters = fit_hyperparameters(self.fit_request(pairs))
+        estimators = {"pa": ProcrustesAnalysis(latent_dim=hyperparameters["latent_dim"])}
+        if self.fit_fields["method"] == "lpa":
+            estimators["lpa"] = LocalProcrustesAnalysis(**hyperparameters)
+        scores = {name: held_out_nmse(estimator, pairs.source, pairs.target,
+                                      self.cross_validation_folds,
+                                      self.fit_fields["random_state"])
+                  for name, estimator in estimators.items()}
+        self.get_logger().info(
+            f"held-out error ({self.cross_validation_folds}-fold, nMSE of the target "
+            f"columns): " + ", ".join(f"{name.upper()} {score:.4g}"
+                                      for name, score in scores.items()))
+        return {f"held_out_nmse_{name}": score for name, score in scores.items()}
+
     def fit(self, pairs):
-        request = FitModel.Request(model_id=self.model_id, source=to_matrix(pairs.source),
-                                   target=to_matrix(pairs.target), **self.fit_fields)
+        request = self.fit_request(pairs)
         response = self.call(self.fit_client, request)
         if not response.success:
             raise RuntimeError(f"the mapping service could not fit {self.model_id!r}: "
@@ -219,7 +267,9 @@ class CorrespondenceCollector(Node):
             self.program, self.pairing_rule, self.kinematics["source"],
             self.kinematics["target"], self.stepper("source"), self.stepper("target"),
             self.steps_per_sample, self.features, self.task_offset, on_pair=self.publish_pair,
-            should_stop=self.stop.is_set)
+            should_stop=self.stop.is_set, pair_check=self.pair_check,
+            names=(self.robots["source"].name, self.robots["target"].name))
+        self.get_logger().info(f"pairing check: {pair_check_line(pairs.metadata)}")
         pairs.metadata.update(seed=self.program.seed, program=self.program.program)
         return pairs
 
@@ -260,6 +310,8 @@ class CorrespondenceCollector(Node):
             f"collected {len(pairs)} pairs over {pairs.sim_time:.3f} s of simulated time in "
             f"{wall:.3f} s ({pairs.sim_time / wall:.1f}x real time)"
             + ("" if pairs.complete else " (stopped early)"))
+        if self.model_id and pairs.complete and self.cross_validation_folds:
+            pairs.metadata.update(self.held_out(pairs))
         self.publish_batch(pairs)
         if self.output:
             pairs.save(self.output)

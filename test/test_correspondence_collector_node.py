@@ -91,7 +91,10 @@ def test_the_graph_collects_what_the_library_collects(graph_run):
         assert np.array_equal(saved["source"], expected.source)
         assert np.array_equal(saved["target"], expected.target)
         assert bool(saved["complete"]) and str(saved["pairing_rule"]) == "same_command"
-        assert float(saved["sim_time"]) == pytest.approx(18 * STEPS * 1e-3)
+        # settled by state: at least 400 steps a sample, the same clock as the library's
+        assert float(saved["sim_time"]) == expected.sim_time >= 18 * STEPS * 1e-3
+        assert int(saved["meta_pairs_checked"]) == 18 and int(saved["meta_pairs_dropped"]) == 0
+        assert float(saved["meta_worst_residual"]) < 1e-3
     assert expected.source.shape == (18, 4)
 
 
@@ -221,3 +224,49 @@ def test_torque_mode_pid_tracking_of_task_lines_equals_the_library(tmp_path):
         assert np.array_equal(saved["target"], expected.target)
         efforts = saved["target"][:, 6:]
     assert np.abs(efforts).max() > 0.1            # the PID torques are what was recorded
+
+
+def robot_file(name):
+    return ROOT / "scenarios" / "robots" / f"{name}.toml"
+
+
+def collect_over_graph(tmp_path, robots, **params):
+    """A collector run (no mapping service) on its own graph of ``robots``; (exit code, log,
+    saved file path)."""
+    domain_id = unique_domain_id()
+    sims = start_robot_sims(domain_id, tmp_path, robots)
+    try:
+        collector = NodeProcess("correspondence_collector", domain_id, tmp_path, ros_params(
+            source_robot=robots["source"], target_robot=robots["target"], steps_per_sample=400,
+            output=tmp_path / "pairs.npz", wait_timeout=20.0, program="joint_lines",
+            n_segments=10, samples_per_segment=2, seed=0, **params))
+        code = run_to_end(collector, timeout=120)
+    finally:
+        for sim in sims:
+            sim.stop()
+    return code, collector.log(), tmp_path / "pairs.npz"
+
+
+def test_commands_that_cannot_settle_in_time_end_in_one_fatal_line(tmp_path):
+    """The user's longer arms given at most 400 ms a command: not true pairs, so no file and
+    no model, and an error naming the robots, the rule and the residual."""
+    robots = {side: robot_file(f"user_two_link_{side}") for side in ("source", "target")}
+    code, log, saved = collect_over_graph(tmp_path, robots, max_settle_steps=400)
+    assert code != 0 and not saved.exists()
+    fatal = [line for line in log.splitlines() if "FATAL" in line]
+    assert len(fatal) == 1 and "Traceback" not in log, log
+    assert "user_two_link_source -> user_two_link_target" in fatal[0]
+    assert "same_command pairs are not true correspondences" in fatal[0]
+    assert "worst residual" in fatal[0] and "did not settle" in fatal[0]
+
+
+def test_different_joint_counts_pair_on_the_shared_joints_over_the_graph(tmp_path):
+    """2-link source -> 3-joint target: the common joints agree in every pair."""
+    robots = {"source": robot_file("two_link_source"), "target": robot_file("three_dof_arm")}
+    code, log, saved = collect_over_graph(tmp_path, robots)
+    assert code == 0, log
+    with np.load(saved) as pairs:
+        assert pairs["source"].shape == (20, 4) and pairs["target"].shape == (20, 5)
+        assert np.abs(pairs["source"][:, :2] - pairs["target"][:, :2]).max() < 1e-3
+        assert int(pairs["meta_pairs_dropped"]) == 0
+    assert "pairing check: 20 pairs checked, 0 dropped" in log

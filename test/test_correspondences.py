@@ -12,7 +12,8 @@ from lpa_transfer.robots import inverse_kinematics
 from lpa_transfer.exploration.babbling import BabblingProgram
 from lpa_transfer.robots.kinematics import Kinematics, planar_kinematics
 from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, FEATURES,
-                                                      CorrespondenceSet, check_guided_exploration,
+                                                      CorrespondenceSet, PairCheck, PairingError,
+                                                      check_guided_exploration,
                                                       collect_correspondences,
                                                       collect_guided_correspondences,
                                                       feature_names, feature_vector,
@@ -64,8 +65,15 @@ def arms():
         sim.close()
 
 
+#: a sample exactly ``steps_per_sample`` steps after its command, no settling and no check:
+#: the tests of layout and control flow count steps on short programs; settling and the
+#: checks have their own tests below
+FIXED = PairCheck(max_settle_steps=0, tolerance=np.inf, time_tolerance=np.inf)
+
+
 def collect(arms, program, pairing_rule, steps=STEPS, **kwargs):
     source_step, target_step = arms()
+    kwargs.setdefault("pair_check", FIXED)
     pairs = collect_correspondences(program, pairing_rule, SOURCE, TARGET, source_step,
                                     target_step, steps, **kwargs)
     return pairs, source_step, target_step
@@ -665,3 +673,114 @@ def test_guided_collection_in_the_targets_own_ranges_keeps_its_whole_experience(
     with pytest.raises(ValueError, match="target_range must be one of"):
         check_guided_exploration(GoalBabbling(GB_BOUNDS), source, wide_shouldered_target(),
                                  [0, 1], [0, 1], 10.0, target_range="all")
+
+
+# -- true pairs for any robot pair: settling by state and the pairing checks (issue 31) -------
+FAST_LINES = BabblingProgram("joint_lines", 20, 2, seed=0)   # 40 commands, long jumps
+
+
+def user_pair():
+    """The user's pair of longer 2-link arms (scenarios/robots/user_two_link_*.toml)."""
+    params = [robot(f"user_two_link_{side}") for side in ("source", "target")]
+    sims = [RobotSimulator(robot_urdf(p)) for p in params]
+    return [planar_kinematics(p) for p in params], sims
+
+
+def test_a_pair_that_needs_longer_than_400_ms_settles_into_true_pairs():
+    """Measured on these 40 commands before settling (400 steps a sample, no check): joint
+    angles up to 1.3 rad apart, 20 pairs over 1e-3 rad; settled by state: at most 8e-6 rad,
+    for 24.1 instead of 16 s of simulated time."""
+    (source, target), sims = user_pair()
+    program = FAST_LINES
+    try:
+        pairs = collect_correspondences(program, "same_command", source, target, sims[0].step,
+                                        sims[1].step, STEPS)
+    finally:
+        for sim in sims:
+            sim.close()
+    assert len(pairs) == 40 and pairs.complete
+    residual = np.abs(pairs.source[:, :2] - pairs.target[:, :2]).max()
+    assert residual < 1e-4
+    meta = pairs.metadata
+    assert (meta["pairs_checked"], meta["pairs_dropped"]) == (40, 0)
+    assert meta["worst_residual"] == pytest.approx(residual)
+    assert meta["residual_unit"] == "rad" and meta["unsettled_target"] == 0
+    assert pairs.sim_time > 40 * STEPS * DT      # settling took longer than the minimum
+
+
+def test_pairs_that_cannot_be_made_true_end_in_an_error_naming_robot_rule_and_residual():
+    (source, target), sims = user_pair()
+    program = FAST_LINES
+    made = []
+    try:
+        with pytest.raises(PairingError, match=r"src -> tgt: \d+ of \d+ same_command pairs .*"
+                           r"worst residual 0\.\d+ rad > tolerance 0\.001 rad.*"
+                           r"did not settle"):
+            collect_correspondences(program, "same_command", source, target, sims[0].step,
+                                    sims[1].step, STEPS, names=("src", "tgt"),
+                                    on_pair=lambda *pair: made.append(pair),
+                                    pair_check=PairCheck(max_settle_steps=STEPS))
+    finally:
+        for sim in sims:
+            sim.close()
+    assert len(made) < 40
+
+
+def test_dropped_pairs_are_counted_and_retry_settles_them():
+    """A tolerance the fixed 400 ms cannot meet on some commands: drop keeps the good pairs
+    only; retry settles the bad ones for another budget and keeps them."""
+    program = FAST_LINES
+    results = {}
+    for action in ("drop", "retry"):
+        (source, target), sims = user_pair()
+        check = PairCheck(max_settle_steps=STEPS, on_bad_pair=action, max_bad_share=1.0,
+                          tolerance=1e-2)
+        try:
+            results[action] = collect_correspondences(program, "same_command", source, target,
+                                                      sims[0].step, sims[1].step, STEPS,
+                                                      pair_check=check)
+        finally:
+            for sim in sims:
+                sim.close()
+    dropped = results["drop"]
+    assert 0 < dropped.metadata["pairs_dropped"] < 40
+    assert len(dropped) == 40 - dropped.metadata["pairs_dropped"]
+    assert dropped.metadata["worst_dropped_residual"] > 1e-2 >= dropped.metadata["worst_residual"]
+    assert np.abs(dropped.source[:, :2] - dropped.target[:, :2]).max() <= 1e-2
+    retried = results["retry"]
+    assert retried.metadata["pairs_dropped"] < dropped.metadata["pairs_dropped"]
+    assert np.abs(retried.source[:, :2] - retried.target[:, :2]).max() <= 1e-2
+
+
+def test_a_pair_with_different_joint_counts_agrees_on_the_shared_joints():
+    """2 joints -> 3 joints (the target's third stays at home): same_command on joints 0-1."""
+    params = [robot("two_link_source"), robot("three_dof_arm")]
+    sims = [RobotSimulator(robot_urdf(p)) for p in params]
+    kinematics = [planar_kinematics(p) for p in params]
+    try:
+        pairs = collect_correspondences(BabblingProgram("joint_lines", 4, 5, seed=3),
+                                        "same_command", *kinematics, sims[0].step,
+                                        sims[1].step, STEPS)
+    finally:
+        for sim in sims:
+            sim.close()
+    assert pairs.source.shape == (20, 4) and pairs.target.shape == (20, 5)
+    assert np.abs(pairs.source[:, :2] - pairs.target[:, :2]).max() <= 1e-3
+    assert pairs.metadata["pairs_dropped"] == 0
+
+
+def test_same_time_index_pairs_share_the_clock_and_are_not_settled(arms):
+    pairs, source, target = collect(arms, SMALL, "same_time_index", steps=10,
+                                    pair_check=PairCheck())
+    assert pairs.metadata["residual_unit"] == "s" and pairs.metadata["worst_residual"] == 0.0
+    assert pairs.sim_time == pytest.approx(len(pairs) * 10 * DT)   # no settling on the move
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(max_settle_steps=-1), "max_settle_steps"), (dict(check_steps=0), "check_steps"),
+    (dict(tolerance=float("nan")), "tolerance must be a number >= 0"),
+    (dict(on_bad_pair="ignore"), "on_bad_pair must be one of"),
+    (dict(max_bad_share=1.5), r"max_bad_share must be a number in \[0, 1\]")])
+def test_bad_pair_checks_are_refused(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        PairCheck(**kwargs)

@@ -17,7 +17,12 @@ and pairs their samples by one of three rules — each thesis domain uses a diff
   is sent, by its inverse kinematics, to the point the source's end effector reached (plus
   ``task_offset``, the target's frame relative to the source's); §4.4.2.
 
-Each sample is the robot's state after ``steps_per_sample`` physics steps, as the
+A pair is made true for any robot pair, not only for the thesis' (:class:`PairCheck`): with
+``same_command`` and ``same_task_point`` each commanded robot settles, by its state, before it
+is sampled, and every pair is checked under its rule; failing pairs are dropped or retried,
+and too many end the collection with a :class:`PairingError`.
+
+Each sample is the robot's state after (at least) ``steps_per_sample`` physics steps, as the
 concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (backward
 difference of velocities over the clock's difference rounded to 1 ns: the difference of two
 float clock readings carries a rounding error that grows with the time already run, and
@@ -51,6 +56,7 @@ JOINT_FEATURES = ("position", "velocity", "acceleration", "effort")
 TASK_FEATURES = ("ee_x", "ee_y", "ee_z")
 FEATURES = JOINT_FEATURES + TASK_FEATURES
 DEFAULT_FEATURES = ("position", "ee_x", "ee_y")
+BAD_PAIR_ACTIONS = ("drop", "retry")
 
 
 def check_features(features):
@@ -221,48 +227,220 @@ def run_commands(commands, step, steps_per_sample, features, home, should_stop=N
     return _rows(samples), elapsed(previous, start)
 
 
+# -- true pairs: settling by state and the pairing checks -------------------------------------
+@dataclass(frozen=True)
+class PairCheck:
+    """How :func:`collect_correspondences` makes pairs true for any robot pair, and checks them.
+
+    Settling (``same_command``, ``same_task_point``; a ``same_time_index`` pair is sampled on
+    the move, §5.4.1): after ``steps_per_sample`` steps a commanded robot keeps stepping in
+    chunks of ``check_steps`` until no joint moves faster than ``velocity_tol`` (rad/s, or m/s)
+    and none moved more than ``position_tol`` over the last chunk, for at most
+    ``max_settle_steps`` steps a sample (0: exactly ``steps_per_sample``, no settling).
+
+    The check of each pair, its residual against ``tolerance``:
+    ``same_command``, the largest difference of the common joints (rad) — §3.6 pairs equal
+    joint angles; ``same_task_point``, the distance of the target's end effector from the
+    source's point plus the offset (m); ``same_time_index``, the difference of the two robots'
+    clocks since the start (s), so sample i is the same phase of the same line on both.
+    A pair that fails is dropped (``on_bad_pair="drop"``) or, with ``"retry"``, settled once
+    more for ``max_settle_steps`` and checked again. If more than ``max_bad_share`` of the pairs
+    fail, the collection ends with a :class:`PairingError` instead of returning the set.
+    """
+
+    max_settle_steps: int = 3000
+    check_steps: int = 50
+    velocity_tol: float = 1e-3
+    position_tol: float = 1e-5
+    tolerance: float = 1e-3
+    time_tolerance: float = 1e-9
+    on_bad_pair: str = "drop"
+    max_bad_share: float = 0.05
+
+    def __post_init__(self):
+        check_int(self.max_settle_steps, "max_settle_steps", 0)
+        check_int(self.check_steps, "check_steps", 1)
+        for name in ("velocity_tol", "position_tol", "tolerance", "time_tolerance"):
+            value = getattr(self, name)     # inf turns a check off
+            if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                    or np.isnan(value) or value < 0:
+                raise ValueError(f"{name} must be a number >= 0 (inf: no check), got {value!r}")
+        if self.on_bad_pair not in BAD_PAIR_ACTIONS:
+            raise ValueError(f"on_bad_pair must be one of {BAD_PAIR_ACTIONS}, got "
+                             f"{self.on_bad_pair!r}")
+        share = self.max_bad_share
+        if isinstance(share, bool) or not isinstance(share, (int, float)) \
+                or not 0 <= share <= 1:
+            raise ValueError(f"max_bad_share must be a number in [0, 1], got {share!r}")
+
+
+class PairingError(RuntimeError):
+    """The robots' samples cannot be made true correspondences under the pairing rule."""
+
+
+def settle(step, command, steps, check):
+    """Step ``command`` for ``steps``, then until settled (:class:`PairCheck`); returns
+    (state, settled, steps run). Without settling (max_settle_steps 0) settled is True."""
+    state = step(command, steps)
+    if not check.max_settle_steps:
+        return state, True, steps
+    run, before = steps, None
+    while True:
+        if before is not None and np.all(np.abs(state.velocities) <= check.velocity_tol) \
+                and np.all(np.abs(state.positions - before) <= check.position_tol):
+            return state, True, run
+        if run >= check.max_settle_steps:
+            return state, False, run
+        chunk = min(check.check_steps, check.max_settle_steps - run)
+        before = state.positions
+        state = step(command, chunk)
+        run += chunk
+
+
+class PairTally:
+    """Counts a collection's checked and dropped pairs, the robots that did not settle and
+    the residuals; ``summary()`` goes into the set's metadata (:func:`pair_check_line`)."""
+
+    UNITS = {"same_command": "rad", "same_task_point": "m", "same_time_index": "s"}
+
+    def __init__(self, pairing_rule, check, names):
+        self.rule, self.check, self.names = pairing_rule, check, names
+        self.tolerance = check.time_tolerance if pairing_rule == "same_time_index" \
+            else check.tolerance
+        self.checked = self.dropped = 0
+        self.unsettled = {"source": 0, "target": 0}
+        self.residuals, self.worst_dropped = [], 0.0
+
+    def add(self, residual, settled):
+        """Count one checked pair; True if it is kept."""
+        self.checked += 1
+        for side, ok in settled.items():
+            self.unsettled[side] += not ok
+        if residual <= self.tolerance:
+            self.residuals.append(residual)
+            return True
+        self.dropped += 1
+        self.worst_dropped = max(self.worst_dropped, residual)
+        return False
+
+    def too_many_dropped(self, n_planned):
+        return self.dropped > self.check.max_bad_share * n_planned
+
+    def summary(self):
+        return dict(pairs_checked=self.checked, pairs_dropped=self.dropped,
+                    pair_tolerance=self.tolerance, residual_unit=self.UNITS[self.rule],
+                    worst_residual=max(self.residuals, default=0.0),
+                    worst_dropped_residual=self.worst_dropped,
+                    unsettled_source=self.unsettled["source"],
+                    unsettled_target=self.unsettled["target"])
+
+    def error(self):
+        """The PairingError naming the robots, the rule and the residual."""
+        lagging = [f"{name} did not settle on {count} commands within "
+                   f"{self.check.max_settle_steps} steps"
+                   for name, count in zip(self.names, self.unsettled.values()) if count]
+        unit = self.UNITS[self.rule]
+        return PairingError(
+            f"{self.names[0]} -> {self.names[1]}: {self.dropped} of {self.checked} "
+            f"{self.rule} pairs are not true correspondences (worst residual "
+            f"{self.worst_dropped:.3g} {unit} > tolerance {self.tolerance:g} {unit}; more than "
+            f"max_bad_share {self.check.max_bad_share:g})"
+            + (": " + "; ".join(lagging) if lagging else "")
+            + ". Raise max_settle_steps or steps_per_sample, or check the robots.")
+
+
+def pair_check_line(metadata):
+    """One line on a collection's pairing check, from its set's metadata (PairTally)."""
+    unit = metadata["residual_unit"]
+    return (f"{metadata['pairs_checked']} pairs checked, {metadata['pairs_dropped']} dropped "
+            f"(residual > {metadata['pair_tolerance']:g} {unit}); worst kept residual "
+            f"{metadata['worst_residual']:.3g} {unit}; commands not settled: source "
+            f"{metadata['unsettled_source']}, target {metadata['unsettled_target']}")
+
+
+def pair_residual(pairing_rule, source, target, source_state, target_state, offset, times):
+    """The pair's residual under its rule (PairCheck)."""
+    if pairing_rule == "same_command":
+        n = min(source.n_joints, target.n_joints)
+        return float(np.abs(source_state.positions[:n] - target_state.positions[:n]).max())
+    if pairing_rule == "same_task_point":
+        point = np.asarray(source_state.end_effector[:len(offset)]) + offset
+        return float(np.linalg.norm(target_state.end_effector[:len(offset)] - point))
+    return abs(times[0] - times[1])
+
+
 def collect_correspondences(program, pairing_rule, source, target, step_source, step_target,
                             steps_per_sample, features=DEFAULT_FEATURES, task_offset=None,
-                            on_pair=None, should_stop=None):
+                            on_pair=None, should_stop=None, pair_check=None,
+                            names=("source", "target")):
     """Drive both robots through ``program`` and pair their samples (module docstring).
 
     ``source``/``target`` are :class:`~lpa_transfer.robots.kinematics.Kinematics`; ``step_*`` advance
-    the robots; ``on_pair(index, source_sample, target_sample)`` sees each pair as it is made;
-    ``should_stop()`` ends collection early (the result then has ``complete=False``). Returns
-    a :class:`CorrespondenceSet` (robot names left empty for the caller).
+    the robots; ``on_pair(index, source_sample, target_sample)`` sees each kept pair as it is
+    made; ``should_stop()`` ends collection early (the result then has ``complete=False``).
+    ``pair_check`` (:class:`PairCheck`, its defaults when None) settles the robots and checks
+    every pair; ``names`` name the robots in its :class:`PairingError`. Returns a
+    :class:`CorrespondenceSet` (robot names left empty for the caller) whose metadata hold the
+    check's tally (:meth:`PairTally.summary`).
     """
     features = check_features(features)
     check_int(steps_per_sample, "steps_per_sample", 1)
+    check = PairCheck() if pair_check is None else pair_check
+    if not isinstance(check, PairCheck):
+        raise ValueError(f"pair_check must be a PairCheck, got {type(check).__name__}")
     source_commands, target_commands = planned_commands(program, pairing_rule, source, target)
+    # a same_time_index pair is sampled on the move (§5.4.1): no settling
+    settling = replace(check, max_settle_steps=0) if pairing_rule == "same_time_index" \
+        else check
     offset = np.zeros(0) if task_offset is None else np.asarray(task_offset, dtype=np.float64)
     if pairing_rule == "same_task_point":
         n_task = target.forward(target.home[None]).shape[1]
         offset = np.zeros(n_task) if offset.size == 0 else offset
         if offset.shape != (n_task,) or not np.isfinite(offset).all():
             raise ValueError(f"task_offset needs {n_task} finite values, got {task_offset}")
-    source_previous = source_start = step_source(source.home, steps_per_sample)
-    target_previous = step_target(target.home, steps_per_sample)
+    source_previous = source_start = settle(step_source, source.home, steps_per_sample,
+                                            settling)[0]
+    target_previous = target_start = settle(step_target, target.home, steps_per_sample,
+                                            settling)[0]
     target_command = target.home
+    tally = PairTally(pairing_rule, check, names)
     pairs_source, pairs_target, complete = [], [], True
     for index, source_command in enumerate(source_commands):
         if should_stop is not None and should_stop():
             complete = False
             break
-        source_state = step_source(source_command, steps_per_sample)
-        if target_commands is None:
-            target_command = task_point_command(target, source_state.end_effector, offset,
-                                                target_command)
-        else:
-            target_command = target_commands[index]
-        target_state = step_target(target_command, steps_per_sample)
-        pairs_source.append(feature_vector(source_state, source_previous, features))
-        pairs_target.append(feature_vector(target_state, target_previous, features))
-        if on_pair is not None:
-            on_pair(index, pairs_source[-1], pairs_target[-1])
+        for attempt in range(1 + (check.on_bad_pair == "retry" and settling.max_settle_steps > 0)):
+            first = attempt == 0
+            source_state, source_settled, _ = settle(
+                step_source, source_command, steps_per_sample if first else settling.check_steps,
+                settling)
+            if target_commands is None:
+                target_command = task_point_command(target, source_state.end_effector, offset,
+                                                    target_command)
+            else:
+                target_command = target_commands[index]
+            target_state, target_settled, _ = settle(
+                step_target, target_command, steps_per_sample if first else settling.check_steps,
+                settling)
+            residual = pair_residual(pairing_rule, source, target, source_state, target_state,
+                                     offset, (elapsed(source_state, source_start),
+                                              elapsed(target_state, target_start)))
+            if residual <= tally.tolerance:
+                break
+        kept = tally.add(residual, {"source": source_settled, "target": target_settled})
+        if kept:
+            pairs_source.append(feature_vector(source_state, source_previous, features))
+            pairs_target.append(feature_vector(target_state, target_previous, features))
+            if on_pair is not None:
+                on_pair(len(pairs_source) - 1, pairs_source[-1], pairs_target[-1])
         source_previous, target_previous = source_state, target_state
+        if tally.too_many_dropped(len(source_commands)):
+            raise tally.error()
+    if not complete and tally.dropped > check.max_bad_share * tally.checked:
+        raise tally.error()
     return CorrespondenceSet(_rows(pairs_source), _rows(pairs_target), pairing_rule=pairing_rule,
                              features=features, sim_time=elapsed(source_previous, source_start),
-                             complete=complete)
+                             complete=complete, metadata=tally.summary())
 
 
 def _rows(samples):
