@@ -290,6 +290,9 @@ class CorrespondenceCollector(Node):
             babbling, environments["source"], environments["target"], self.joints["source"],
             self.joints["target"], self.guided_seconds, on_pair=self.publish_pair,
             should_stop=self.stop.is_set, target_range=self.target_range)
+        self.get_logger().info(f"pairing check (reported, not enforced: each row is what its "
+                               f"robot reached): {pair_check_line(pairs.metadata)}, median "
+                               f"{pairs.metadata['median_residual']:.3g} rad")
         pairs.metadata.update(program=GUIDED)
         return pairs
 

@@ -516,6 +516,10 @@ def test_guided_collection_pairs_each_robots_observations_of_the_same_commands(g
                                    atol=1e-6)
     lag = np.abs(pairs.source[:, :2] - pairs.target[:, :2])
     assert lag.max() < 0.3 and np.median(lag) < 0.02          # the same commands
+    # reported as the pairing check (not enforced: each row is what its robot reached)
+    assert pairs.metadata["worst_residual"] == lag.max()
+    assert pairs.metadata["median_residual"] == np.median(lag.max(axis=1))
+    assert (pairs.metadata["pairs_checked"], pairs.metadata["pairs_dropped"]) == (100, 0)
     assert np.abs(pairs.source[:, 2:] - pairs.target[:, 2:]).max() > 0.1   # other arms
     # Seeded: fresh simulators and the same seed repeat the collection bit for bit.
     again, _, _ = guided(gb_arms)

@@ -95,6 +95,9 @@ def test_the_graph_collects_what_the_library_collects(guided_run):
         assert float(saved["sim_time"]) == pytest.approx(SECONDS)
         assert str(saved["meta_program"]) == "goal_babbling" and int(saved["meta_seed"]) == SEED
         assert list(saved["features"]) == ["position", "ee_x", "ee_y"]
+        assert float(saved["meta_worst_residual"]) == expected.metadata["worst_residual"]
+    assert f"pairing check (reported, not enforced: each row is what its robot reached): " \
+        f"{N_PAIRS} pairs checked" in guided_run["log"]
 
 
 def test_each_side_is_its_own_kinematics_of_nearly_the_same_commands(guided_run):

@@ -358,6 +358,21 @@ def pair_check_line(metadata):
             f"{metadata['unsettled_source']}, target {metadata['unsettled_target']}")
 
 
+def reached_residuals(source_rows, target_rows, n_shared):
+    """The pairing check's summary for guided pairs (rows (q̄, x)): how far apart the shared
+    joints the two robots reached for the same command are (rad). Reported, not enforced:
+    each row is what its robot reached, a consistent (q̄, x) of that robot (§6.4.2), and the
+    robots may lag their commands differently at goal babbling's pace."""
+    if len(source_rows):
+        residual = np.abs(source_rows[:, :n_shared] - target_rows[:, :n_shared]).max(axis=1)
+    else:
+        residual = np.zeros(0)
+    return dict(pairs_checked=len(residual), pairs_dropped=0, pair_tolerance=np.inf,
+                residual_unit="rad", worst_residual=float(residual.max(initial=0.0)),
+                median_residual=float(np.median(residual)) if len(residual) else 0.0,
+                worst_dropped_residual=0.0, unsettled_source=0, unsettled_target=0)
+
+
 def pair_residual(pairing_rule, source, target, source_state, target_state, offset, times):
     """The pair's residual under its rule (PairCheck)."""
     if pairing_rule == "same_command":
@@ -550,6 +565,8 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
                     drift=babbling.drift, p_home=babbling.p_home,
                     steps_per_second=babbling.steps_per_second, seed=babbling.seed,
                     followed=followed, target_experience=experience)
+    metadata.update(reached_residuals(source_rows[followed], experience[followed],
+                                      len(source_joints)))
     return CorrespondenceSet(
         source_rows[followed], experience[followed],
         pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],
