@@ -66,6 +66,9 @@ def test_outputs_and_bag(smoke_run):
     assert topics["/correspondences"].message_count == 3 * 60
     with np.load(smoke_run / "pairs_0_star1.npz") as pairs:
         assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 16)
+        # paired by time index: sample i of both robots at the same simulated time
+        assert str(pairs["meta_residual_unit"]) == "s" and float(pairs["meta_worst_residual"]) == 0
+        assert int(pairs["meta_pairs_dropped"]) == 0
         source_q = pairs["source"][:, :5]
     # babbled in the vicinity of Star 1: the youBot's box is ±0.15 m around the star's centre
     # (PID tracking lags, so allow 3 cm)
