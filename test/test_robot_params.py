@@ -265,3 +265,26 @@ def test_chapter_5_drives_are_the_sourced_ones():
     for stem in ("two_link_source", "two_link_target"):   # Table 3.1 robots: no drives
         table = load_robot_params(ROBOTS / f"{stem}.toml")
         assert not table.joint_armature.any() and not table.joint_damping.any()
+
+
+def test_extends_places_the_same_chain_elsewhere(tmp_path):
+    """poppy_right_arm_zup.toml: poppy_right_arm.toml's chain with its own [base]; the z-up
+    scene's right shoulder stands 0.66 m above the floor (issue 27)."""
+    from lpa_transfer.robots.serial_chain import chain_frames
+
+    base = load_robot_params(ROBOTS / "poppy_right_arm.toml")
+    placed = load_robot_params(ROBOTS / "poppy_right_arm_zup.toml")
+    assert placed.name == base.name and placed.source != base.source
+    for field in ("joint_xyz", "joint_rpy", "joint_axes", "joint_limits", "link_masses",
+                  "effort_limits", "tool_xyz"):
+        np.testing.assert_array_equal(getattr(placed, field), getattr(base, field))
+    np.testing.assert_array_equal(placed.base_xyz, [0.0, 0.42, 0.017])
+    shoulder = chain_frames(placed, np.zeros((1, 5)))[0, 1, :3, 3]     # world y is up
+    assert shoulder[1] == pytest.approx(0.6625, abs=1e-3)
+    (tmp_path / "a.toml").write_text('extends = "b.toml"\n')
+    (tmp_path / "b.toml").write_text('extends = "a.toml"\n')
+    with pytest.raises(ValueError, match="'extends' loops back"):
+        load_robot_params(tmp_path / "a.toml")
+    (tmp_path / "c.toml").write_text('extends = "missing.toml"\n')
+    with pytest.raises(ValueError, match="missing.toml, which does not exist"):
+        load_robot_params(tmp_path / "c.toml")

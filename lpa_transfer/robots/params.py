@@ -22,6 +22,10 @@ below are derived from it (:func:`planar_chain_fields`): joints turn about z, li
 thin uniform rod along its x axis, so the chain moves in the x-y plane of the simulator,
 whose gravity points along −y (:func:`lpa_transfer.robots.planar_chain.load_fixed_robot`).
 
+A file may start from another: ``extends = "other.toml"`` (relative to the file) takes that
+file's table and replaces its top-level keys by this file's, e.g. the same arm with another
+``[base]`` placement (``scenarios/robots/poppy_right_arm_zup.toml``).
+
 ``kind = "serial"``: a general chain, each value as in a URDF (frames, rad, m, kg, kg·m²)::
 
     name = "youbot_arm"
@@ -320,14 +324,32 @@ def _serial_fields(data, path):
     return fields
 
 
-def load_robot_params(path):
-    """Read and validate a robot parameter file; errors name the file and the key."""
-    path = Path(path)
+def _read_toml(path, seen=()):
+    """The file's table; with ``extends = "<file>"`` (relative to this file) the parent's
+    table with this file's top-level keys in place of its own: the same robot placed or
+    named otherwise without a copy of its chain."""
+    if path.resolve() in seen:
+        raise ValueError(f"{path}: 'extends' loops back to {path.name}")
     try:
         with path.open("rb") as handle:
             data = tomllib.load(handle)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML: {exc}") from None
+    parent = data.pop("extends", None)
+    if parent is None:
+        return data
+    if not isinstance(parent, str) or not parent.strip():
+        raise ValueError(f"{path}: key 'extends' must name a robot file")
+    parent_path = path.parent / parent
+    if not parent_path.is_file():
+        raise ValueError(f"{path}: 'extends' names {parent_path}, which does not exist")
+    return {**_read_toml(parent_path, (*seen, path.resolve())), **data}
+
+
+def load_robot_params(path):
+    """Read and validate a robot parameter file; errors name the file and the key."""
+    path = Path(path)
+    data = _read_toml(path)
     for key in ("name", "source"):
         if not isinstance(data.get(key), str) or not data[key].strip():
             raise ValueError(f"{path}: missing key '{key}' (a non-empty string)")
