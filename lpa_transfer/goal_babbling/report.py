@@ -17,7 +17,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from lpa_transfer.evaluation.learning_curves import rank_sum_comparison, time_saved
-from lpa_transfer.goal_babbling.reaching import evaluation_points
+from lpa_transfer._validation import check_x_bounds
+from lpa_transfer.goal_babbling.reaching import evaluation_points, grid
 from lpa_transfer.robots.kinematics import robot_kinematics, sample_joint_uniform
 from lpa_transfer.robots.params import load_robot_params
 
@@ -66,7 +67,27 @@ def report_lines(curves, experiment):
               "mean reaching rate at every evaluation (learning time in s):",
               f"{'':<22} " + " ".join(f"{x:>5g}" for x in times)]
     lines += every_evaluation + [""] + level_lines(curves, times, scratch_rate) + [""] + \
-        comparison_lines(curves, times) + ["", experiment.thesis]
+        comparison_lines(curves, times) + [""] + grid_lines(curves, experiment) + \
+        ["", experiment.thesis]
+    return lines
+
+
+def grid_lines(curves, experiment):
+    """The final mean rates over every point of the grid over X_bounds, not only the points the
+    target can reach (the test points): §6.5 does not say which of the two it counted."""
+    target = robot_kinematics(experiment.robots["target"], experiment.target_home)
+    n_points = len(evaluation_points(target, experiment.x_bounds,
+                                     spacing=experiment.eval_spacing,
+                                     n_joint_samples=experiment.eval_joint_samples))
+    n_grid = len(grid(check_x_bounds(experiment.x_bounds, len(experiment.x_bounds[0])),
+                      experiment.eval_spacing))
+    share = n_points / n_grid
+    lines = [f"over all {n_grid} points of the {experiment.eval_spacing:g} m grid over X_bounds "
+             f"(the test points are the {n_points} the target reaches, {share:.3f} of them): "
+             f"final mean rate over the test points -> over the whole grid"]
+    for name, runs in curves.items():
+        _, rate, _ = mean_curve(runs, "rate")
+        lines.append(f"{name:<22} {rate[-1]:5.3f} -> {rate[-1] * share:5.3f}")
     return lines
 
 
