@@ -5,7 +5,9 @@ Run: ``recorder --ros-args -p output:=run.mcap`` (or
 
 Subscriptions are raw (serialized CDR), written in the callback. On SIGINT/SIGTERM the node
 stops discovery, drains messages still queued, closes the bag (readable, with summary), logs
-the per-topic counts and exits 0.
+the per-topic counts and exits 0. An output it cannot create, or a write that fails (a full
+disk), is one FATAL line and exit 1; after a failed write it still tries to close the bag so
+that what reached the disk stays readable.
 
 Parameters (output, topics, topic_regex, exclude, ...): docs/nodes.md.
 """
@@ -37,7 +39,11 @@ class Recorder(Node):
         self.exclude = set(array_parameter(self, "exclude") or DEFAULT_EXCLUDE)
         self.qos_depth = self.declare_parameter("qos_depth", 1000).value
         period = self.declare_parameter("discovery_period", 0.5).value
-        self.bag = BagWriter(output)
+        try:
+            self.bag = BagWriter(output)
+        except OSError as exc:
+            raise ValueError(f"cannot write the bag {output!r}: {exc.strerror or exc}") from None
+        self.write_error = None   # the first failed write (OSError); the node then stops
         self.subscribed = {}  # topic -> type name
         self.discover()
         self.discovery_timer = self.create_timer(period, self.discover)
@@ -68,11 +74,16 @@ class Recorder(Node):
         self.get_logger().info(f"subscribed to {topic} [{type_name}]")
 
     def on_message(self, topic, type_name, data):
+        if self.write_error is not None:
+            return
         received_ns = self.get_clock().now().nanoseconds
-        self.bag.write(topic, data, received_ns, header_stamp_ns(type_name, data))
+        try:
+            self.bag.write(topic, data, received_ns, header_stamp_ns(type_name, data))
+        except OSError as exc:
+            self.write_error = exc
 
     def finish(self):
-        """Close the bag and log what it holds."""
+        """Close the bag and log what it holds; OSError if it cannot be written."""
         self.bag.close()
         counts = ", ".join(f"{topic}: {count}" for topic, count in sorted(self.bag.counts.items()))
         self.get_logger().info(f"closed {self.bag.path}; messages per topic: {counts or 'none'}")
@@ -91,19 +102,36 @@ def drain(executor, recorder, quiet_s=0.3, limit_s=3.0):
 
 def main(args=None):
     stop = init_with_stop_event(args)
-    recorder = Recorder()
+    logger = rclpy.logging.get_logger("recorder")
+    try:
+        recorder = Recorder()
+    except Exception as exc:  # a missing or unwritable output: say what, no traceback
+        logger.fatal(str(exc))
+        rclpy.try_shutdown()
+        raise SystemExit(1) from None
     executor = SingleThreadedExecutor()
     executor.add_node(recorder)
+    failure = None
     try:
-        while rclpy.ok() and not stop.is_set():
+        while rclpy.ok() and not stop.is_set() and recorder.write_error is None:
             executor.spin_once(timeout_sec=0.2)
         recorder.destroy_timer(recorder.discovery_timer)
-        drain(executor, recorder)
+        if recorder.write_error is None:
+            drain(executor, recorder)
     finally:
-        recorder.finish()
+        failure = recorder.write_error
+        try:
+            recorder.finish()
+        except OSError as exc:
+            failure = failure or exc
+        if failure is not None:
+            logger.fatal(f"cannot write the bag {recorder.bag.path}: "
+                         f"{failure.strerror or failure}; stopped recording")
         executor.shutdown()
         recorder.destroy_node()
         rclpy.try_shutdown()
+    if failure is not None:
+        raise SystemExit(1)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ import time
 import pytest
 
 from lpa_transfer.recording import bag
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
+from lpa_transfer_nodes.testing import (ClientNode, NodeProcess, ros_params, run_to_end,
+                                       unique_domain_id, wait_until)
 
 from rclpy.duration import Duration
 from rclpy.qos import QoSProfile
@@ -84,7 +85,9 @@ def test_recorder_finalises_on_sigterm(ros_node, tmp_path):
 
 
 def test_player_replays_samples_in_order(ros_node, tmp_path):
-    """A bag written directly (the recorder is tested above), played with a topic subset and remap."""
+    """A bag written directly (the recorder is tested above), played with a topic subset and
+    the standard ``-r`` remap, with the player's defaults: it waits for the listener, so a
+    listener started beside it receives every message."""
     path = tmp_path / "to_play.mcap"
     with bag.BagWriter(path) as writer:
         writer.add_topic("/joint_states", "sensor_msgs/msg/JointState")
@@ -97,8 +100,7 @@ def test_player_replays_samples_in_order(ros_node, tmp_path):
     received = []
     test.node.create_subscription(CorrespondenceSample, "/replayed", received.append, RELIABLE_1000)
     player = NodeProcess("player", domain_id, tmp_path / "log_play", ros_params(
-        input=path, rate=0.0, topics="['/samples']", remap="['/samples:=/replayed']",
-        start_delay=0.0, wait_for_subscribers=1))
+        input=path, rate=0.0, topics="['/samples']") + ["-r", "/samples:=/replayed"])
     try:
         # the player ends by itself once it has published the bag
         test.spin_until(lambda: not player.alive(), timeout=20, what="the player to finish")
@@ -108,3 +110,73 @@ def test_player_replays_samples_in_order(ros_node, tmp_path):
         assert player.stop() == 0, player.log()
     assert [(m.index, list(m.source), list(m.target)) for m in received] == [
         (s.index, list(s.source), list(s.target)) for s in map(sample, range(SAMPLES))], player.log()
+
+
+def written_bag(path):
+    with bag.BagWriter(path) as writer:
+        writer.add_topic("/samples", "lpa_transfer_interfaces/msg/CorrespondenceSample")
+        for i in range(SAMPLES):
+            writer.write("/samples", serialize_message(sample(i)), i)
+    return path
+
+
+def fatal_lines(log):
+    return [line for line in log.splitlines() if "FATAL" in line]
+
+
+@pytest.mark.parametrize("case", ["missing", "not MCAP", "no requested topic"])
+def test_player_faults_are_one_fatal_line_and_exit_1(tmp_path, case):
+    inputs = {"missing": tmp_path / "nothing.mcap", "not MCAP": tmp_path / "text.mcap",
+              "no requested topic": written_bag(tmp_path / "run.mcap")}
+    (tmp_path / "text.mcap").write_text("not a bag\n")
+    expected = {"missing": "no such file", "not MCAP": "is not a readable MCAP bag",
+                "no requested topic": "none of the requested topics ['/sampels']"}
+    player = NodeProcess("player", unique_domain_id(), tmp_path / "log", ros_params(
+        input=inputs[case], topics="['/sampels']", start_delay=0.0))
+    assert run_to_end(player, timeout=30) == 1, player.log()
+    fatal = fatal_lines(player.log())
+    assert len(fatal) == 1 and expected[case] in fatal[0], player.log()
+    assert "Traceback" not in player.log()
+
+
+def test_player_warns_about_absent_topics_and_unheard_messages(tmp_path):
+    player = NodeProcess("player", unique_domain_id(), tmp_path / "log", ros_params(
+        input=written_bag(tmp_path / "run.mcap"), topics="['/samples', '/sampels']",
+        start_delay=0.0, rate=0.0, wait_timeout=1.0))
+    assert run_to_end(player, timeout=30) == 0, player.log()
+    log = player.log()
+    assert "not in" in log and "so not played: ['/sampels']" in log
+    assert f"published to no subscriber on: ['/samples ({SAMPLES})']" in log
+
+
+def test_recorder_unwritable_output_is_one_fatal_line_and_exit_1(tmp_path):
+    (tmp_path / "a_file").write_text("")
+    recorder = NodeProcess("recorder", unique_domain_id(), tmp_path / "log",
+                           ros_params(output=tmp_path / "a_file" / "run.mcap"))
+    assert run_to_end(recorder, timeout=30) == 1, recorder.log()
+    fatal = fatal_lines(recorder.log())
+    assert len(fatal) == 1 and "cannot write the bag" in fatal[0], recorder.log()
+    assert "Traceback" not in recorder.log()
+
+
+def test_recorder_on_a_full_disk_stops_with_one_fatal_line_and_exit_1(ros_node, tmp_path):
+    """/dev/full: every write fails with ENOSPC, as on a full disk."""
+    domain_id = unique_domain_id()
+    test = ros_node(domain_id)
+    samples = test.node.create_publisher(CorrespondenceSample, "/samples", RELIABLE_1000)
+    recorder = NodeProcess("recorder", domain_id, tmp_path / "log",
+                           ros_params(output="/dev/full", discovery_period=0.1))
+    try:
+        wait_until(samples.get_subscription_count, what="the recorder's subscription")
+        deadline = time.monotonic() + 10
+        i = 0
+        while recorder.alive() and time.monotonic() < deadline:   # past the 1 s flush period
+            samples.publish(sample(i))
+            i += 1
+            test.spin_for(0.05)
+    finally:
+        code = recorder.stop()
+    assert code == 1, recorder.log()
+    fatal = fatal_lines(recorder.log())
+    assert len(fatal) == 1 and "No space left on device" in fatal[0], recorder.log()
+    assert "Traceback" not in recorder.log()
