@@ -41,8 +41,9 @@ unaffected.
 """
 import numpy as np
 from movement_primitives.dmp import DMP
-# private helpers of DMP.imitate, stable in the pinned movement_primitives==0.9.1
-# (requirements/python.txt)
+# Private helpers of DMP.imitate: fit_many needs its regression over several demonstrations
+# at once, which the public API does not offer; the pin movement_primitives==0.9.1
+# (requirements/python.txt) keeps them fixed and test/test_dmp.py checks what they compute.
 from movement_primitives.dmp._dmp import determine_forces, ridge_regression
 from sklearn.base import BaseEstimator
 
