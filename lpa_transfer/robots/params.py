@@ -72,6 +72,8 @@ from pathlib import Path
 
 import numpy as np
 
+from lpa_transfer.robots.urdf import urdf_robot_table
+
 #: Link mass (kg) when a planar ``[[links]]`` table has no ``mass``.
 DEFAULT_LINK_MASS = 1.0
 #: Joint effort limit (N·m) when a planar ``[[joints]]`` table has no ``effort`` (as
@@ -347,9 +349,10 @@ def _read_toml(path, seen=()):
 
 
 def load_robot_params(path):
-    """Read and validate a robot parameter file; errors name the file and the key."""
+    """Read and validate a robot parameter file, or the chain of a URDF (``*.urdf``,
+    :mod:`lpa_transfer.robots.urdf`); errors name the file and the key."""
     path = Path(path)
-    data = _read_toml(path)
+    data = urdf_robot_table(path) if path.suffix.lower() == ".urdf" else _read_toml(path)
     for key in ("name", "source"):
         if not isinstance(data.get(key), str) or not data[key].strip():
             raise ValueError(f"{path}: missing key '{key}' (a non-empty string)")
