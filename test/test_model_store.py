@@ -111,3 +111,56 @@ def test_unreadable_files_are_skipped(tmp_path, data):
     store = ModelStore(tmp_path)
     assert store.ids() == [ID]
     assert len(store.load_errors) == 1 and "junk.npz" in store.load_errors[0]
+
+
+def damaged_store(tmp_path, data):
+    """A store with two good models and one damaged file of each kind (issue 29, row 1)."""
+    (source, target), _ = data
+    store = ModelStore(tmp_path)
+    for model_id in ("good/lpa", "good.pa", "truncated", "empty", "crc", "wrong arrays"):
+        store.fit(model_id, "lpa" if "lpa" in model_id else "pa", source, target)
+    truncated = tmp_path / file_name("truncated")
+    truncated.write_bytes(truncated.read_bytes()[:300])
+    (tmp_path / file_name("empty")).write_bytes(b"")
+    crc = tmp_path / file_name("crc")
+    raw = bytearray(crc.read_bytes())
+    raw[len(raw) // 3] ^= 0x40                        # one bit inside a stored array
+    crc.write_bytes(bytes(raw))
+    wrong = tmp_path / file_name("wrong arrays")
+    with np.load(wrong) as archive:
+        entries = {key: archive[key] for key in archive.files}
+    entries["coef_"] = entries["coef_"][:1, :1]        # arrays that do not fit together
+    np.savez(wrong, **entries)
+    (tmp_path / ".tmp-abc123.npz").write_bytes(b"half a save")
+    return store
+
+
+def test_one_bad_file_of_any_kind_is_quarantined_and_the_rest_served(tmp_path, data):
+    (source, target), test = data
+    before = damaged_store(tmp_path, data)
+    store = ModelStore(tmp_path)
+    assert store.ids() == ["good.pa", "good/lpa"]
+    assert sorted(store.quarantined) == ["crc", "empty", "truncated", "wrong arrays"]
+    for model_id in store.quarantined:
+        assert (tmp_path / "quarantine" / file_name(model_id)).is_file()
+        assert any(file_name(model_id) in error for error in store.load_errors)
+    assert not list(tmp_path.glob(".tmp-*"))           # the killed save's leftover is gone
+    for model_id in store.ids():
+        assert np.array_equal(store.transfer(model_id, test), before.transfer(model_id, test))
+    assert ModelStore(tmp_path).quarantined == []      # quarantined files stay out
+
+
+def test_a_hand_named_file_is_its_ids_one_file_and_delete_removes_it(tmp_path, data):
+    (source, target), test = data
+    ModelStore(tmp_path).fit("pa.v2", "pa", source, target)
+    (tmp_path / file_name("pa.v2")).rename(tmp_path / "pa.v2.npz")   # placed by hand
+    store = ModelStore(tmp_path)
+    assert store.ids() == ["pa.v2"] and (tmp_path / file_name("pa.v2")).is_file()
+    store.delete("pa.v2")
+    assert ModelStore(tmp_path).ids() == [] and not list(tmp_path.glob("*.npz"))
+    # beside the id's own file, a second one is quarantined instead of shadowing it
+    ModelStore(tmp_path).fit("pa.v2", "pa", source, target)
+    ModelStore(tmp_path).fit("other", "pa", source, target)
+    (tmp_path / file_name("other")).rename(tmp_path / "pa.v2.npz")
+    store = ModelStore(tmp_path)
+    assert store.ids() == ["pa.v2"] and store.quarantined == ["pa.v2"]

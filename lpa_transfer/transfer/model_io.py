@@ -23,6 +23,8 @@ import numpy as np
 FORMAT = "lpa_transfer-model"
 FORMAT_VERSION = 1
 _REGISTRY = {}
+#: ``save`` writes to ``<prefix>*.npz`` beside the model and renames it into place.
+TEMPORARY_PREFIX = ".tmp-"
 
 
 class SavableModel:
@@ -47,11 +49,14 @@ class SavableModel:
         entries.update({name: np.asarray(getattr(self, name)) for name in self._learned})
         path = os.fspath(path)
         directory = os.path.dirname(os.path.abspath(path))
-        fd, tmp = tempfile.mkstemp(dir=directory, prefix=".tmp-", suffix=".npz")
+        fd, tmp = tempfile.mkstemp(dir=directory, prefix=TEMPORARY_PREFIX, suffix=".npz")
         try:
             with os.fdopen(fd, "wb") as stream:
                 np.savez(stream, **entries)
+                stream.flush()
+                os.fsync(stream.fileno())      # the data on disk before the name points at it
             os.replace(tmp, path)
+            _fsync_directory(directory)        # and the rename itself survives a power loss
         except BaseException:
             if os.path.exists(tmp):
                 os.unlink(tmp)
@@ -67,8 +72,34 @@ class SavableModel:
         return model
 
 
+def _fsync_directory(directory):
+    fd = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 def load_model(path):
-    """Load any lpa_transfer model file, dispatching on its ``model_class`` entry."""
+    """Load any lpa_transfer model file, dispatching on its ``model_class`` entry.
+
+    Any file that is not a complete model of ours — truncated, empty, failing its zip CRCs,
+    of another format, or with learned arrays that do not fit together — raises ValueError
+    naming the file and the reason (the model is tried on one point before it is returned).
+    """
+    try:
+        model = _read_model(path)
+        model.transfer(np.zeros((1, int(model.n_features_in_))))
+    except ValueError as exc:
+        if str(path) in str(exc):
+            raise
+        raise ValueError(f"model file {path} does not hold a working model: {exc}") from None
+    except Exception as exc:  # BadZipFile, zlib.error, EOFError, KeyError, shape errors...
+        raise ValueError(f"cannot read model file {path}: {type(exc).__name__}: {exc}") from None
+    return model
+
+
+def _read_model(path):
     try:
         archive = np.load(os.fspath(path), allow_pickle=False)
     except (OSError, ValueError) as exc:

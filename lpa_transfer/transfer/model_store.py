@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.transfer.model_io import load_model
+from lpa_transfer.transfer.model_io import TEMPORARY_PREFIX, load_model
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 #: Transfer methods by the name a caller uses: one global map (PA) or local maps (LPA).
@@ -59,20 +59,46 @@ def model_id_of(path):
 class ModelStore:
     """Fitted PA/LPA models persisted in ``directory``, all reloaded on construction.
 
-    Files that cannot be read as models are skipped and listed in ``load_errors``.
+    One bad file never keeps the others from being served: at construction a file that cannot
+    be loaded as a working model is moved to ``<directory>/quarantine/`` (its id in
+    ``quarantined``, the reason in ``load_errors``); temporary files left by a save that was
+    killed are removed; a model file under a name that is not its id's (placed by hand, e.g.
+    ``pa.v2.npz`` for id ``pa.v2``) is renamed to it, or quarantined if the id's own file is
+    there too, so that one id is one file and ``delete`` removes it.
     """
+
+    QUARANTINE = "quarantine"
 
     def __init__(self, directory):
         self.directory = Path(directory).expanduser()
         self.directory.mkdir(parents=True, exist_ok=True)
-        self._models, self.load_errors = {}, []
+        self._models, self.load_errors, self.quarantined = {}, [], []
+        for stale in self.directory.glob(TEMPORARY_PREFIX + "*" + SUFFIX):
+            stale.unlink(missing_ok=True)     # a save killed before its rename
         for path in sorted(self.directory.glob("*" + SUFFIX)):
-            if path.name.startswith("."):
-                continue                      # a temporary file left by a crash mid-save
+            model_id = model_id_of(path)
             try:
-                self._models[model_id_of(path)] = load_model(path)
+                canonical = self.path(model_id)
             except ValueError as exc:
-                self.load_errors.append(str(exc))
+                self._quarantine(path, model_id, str(exc))
+                continue
+            if path != canonical:
+                if canonical.exists():
+                    self._quarantine(path, model_id, f"a second file for id {model_id!r} "
+                                     f"beside {canonical.name}")
+                    continue
+                path = path.rename(canonical)
+            try:
+                self._models[model_id] = load_model(path)
+            except ValueError as exc:
+                self._quarantine(path, model_id, str(exc))
+
+    def _quarantine(self, path, model_id, reason):
+        folder = self.directory / self.QUARANTINE
+        folder.mkdir(exist_ok=True)
+        path.replace(folder / path.name)
+        self.quarantined.append(model_id)
+        self.load_errors.append(f"{path.name} moved to {self.QUARANTINE}/: {reason}")
 
     def path(self, model_id):
         return self.directory / file_name(model_id)
