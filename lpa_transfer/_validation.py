@@ -108,3 +108,14 @@ def check_x_bounds(x_bounds, n_task=None):
         raise ValueError(f"x_bounds have {low.size} coordinates but the robot's task space has "
                          f"{n_task}")
     return low, high
+
+
+def finite_transfer(mapped, source):
+    """``mapped`` if every value is finite; otherwise ValueError (a transfer never answers
+    with inf or NaN for finite inputs silently: e.g. inputs near the float limit)."""
+    if not np.isfinite(mapped).all():
+        rows = np.flatnonzero(~np.isfinite(mapped).all(axis=1))
+        raise ValueError(f"the transferred points of {len(rows)} input rows (first: row "
+                         f"{rows[0]}, largest |value| {np.abs(source[rows[0]]).max():.3g}) are "
+                         "not finite: the inputs are too large for float64 arithmetic")
+    return mapped

@@ -339,3 +339,35 @@ def test_floored_exp_is_exp_of_the_clamped_values(live_share, simd_exp, monkeypa
     assert np.array_equal(gmm._floored_exp(values.copy()), expected)
     strided = np.asfortranarray(values)
     assert np.array_equal(gmm._floored_exp(strided), expected)
+
+
+def test_finite_inputs_far_from_the_data_take_the_nearest_maps_never_zeros():
+    """Issue 29 row 4: at |x| >= ~1e154 the expanded Mahalanobis term overflows; such points
+    take the map of the component nearest in Mahalanobis distance, and what cannot be a
+    finite answer is an error."""
+    from two_link import correspondences
+
+    source, target = correspondences(400, 3)
+    model = LocalProcrustesAnalysis(n_min=20, c_min=1e-7, random_state=0).fit(source, target)
+    direction = np.array([1.0, -0.5, 0.25, 2.0])
+    for magnitude in (1e155, 1e200, 1e250):
+        point = magnitude * direction[None]
+        mapped = model.transfer(point)
+        assert np.isfinite(mapped).all() and np.abs(mapped).max() > 0
+        k = np.argmax(model.responsibilities(point)[0])
+        assert model.responsibilities(point)[0, k] == 1.0
+        np.testing.assert_allclose(mapped[0], model.coef_[k] @ point[0] + model.intercept_[k],
+                                   rtol=1e-12)
+        # the nearest component in Mahalanobis distance (direct, rescaled form)
+        offsets = (point - model.means_) / magnitude
+        distances = [o @ np.linalg.inv(np.linalg.inv(p @ p.T)) @ o
+                     for o, p in zip(offsets, model.precisions_cholesky_)]
+        assert k == int(np.argmin(distances))
+    # a map that triples its input cannot answer finitely at 1e308: an error, for LPA and PA
+    for cls in (LocalProcrustesAnalysis, ProcrustesAnalysis):
+        tripled = cls().fit(source, 3.0 * source)
+        with pytest.raises(ValueError, match="not finite: the inputs are too large"):
+            tripled.transfer(np.full((1, 4), 1e308))
+    near = source[:5]
+    assert np.array_equal(model.transfer(near), model.transfer(np.vstack((near, 1e200 *
+                                                                           direction)))[:5])

@@ -109,6 +109,7 @@ class Responsibilities:
 
     def __init__(self, weights, means, precisions_chol, centre=None):
         dim = means.shape[1]
+        self.means, self.precisions_chol = means, precisions_chol
         self.centre = weights @ means if centre is None else centre
         means = means - self.centre
         precision = precisions_chol @ np.swapaxes(precisions_chol, 1, 2)      # Λ_k = P Pᵀ
@@ -127,16 +128,39 @@ class Responsibilities:
         """
         width = max(len(self.constant), len(self.coefficients))
         for rows in row_blocks(len(X), width):
-            block = (quadratic_features(X[rows] - self.centre) if features is None
-                     else features[rows])
-            weighted = block @ self.coefficients
-            weighted += self.constant
+            with np.errstate(over="ignore", invalid="ignore"):   # far points: handled below
+                block = (quadratic_features(X[rows] - self.centre) if features is None
+                         else features[rows])
+                weighted = block @ self.coefficients
+                weighted += self.constant
+            far = ~np.isfinite(weighted).all(axis=1)
+            if far.any():
+                weighted[far] = 0.0               # set below, from the rescaled distances
             peak = weighted.max(axis=1, keepdims=True)
             weighted -= peak
             resp = _floored_exp(weighted)
             total = resp.sum(axis=1, keepdims=True)
             resp /= total
-            yield rows, resp, peak[:, 0] + np.log(total[:, 0])
+            log_norm = peak[:, 0] + np.log(total[:, 0])
+            if far.any():
+                start = rows.start if isinstance(rows, slice) else 0
+                resp[far], log_norm[far] = self._far(X[start + np.flatnonzero(far)])
+            yield rows, resp, log_norm
+
+    def _far(self, X):
+        """γ and log p(x) of finite points so far from the mixture that the expanded quadratic
+        overflows (|x| beyond ~1e154): all of γ on the component nearest in Mahalanobis
+        distance, computed on rows rescaled by their largest offset (the weights' and
+        normalisers' differences vanish at that distance); log p(x) is -inf."""
+        offsets = X[:, None, :] - self.means[None]                          # (R, K, d)
+        scale = np.abs(offsets).max(axis=2, keepdims=True)
+        scale[scale == 0] = 1.0
+        whitened = np.einsum("rki,kij->rkj", offsets / scale, self.precisions_chol)
+        log_distance = np.log(scale[..., 0]) + 0.5 * np.log(
+            np.einsum("rkj,rkj->rk", whitened, whitened))
+        resp = np.zeros(log_distance.shape)
+        resp[np.arange(len(X)), np.argmin(log_distance, axis=1)] = 1.0
+        return resp, np.full(len(X), -np.inf)
 
 
 def log_likelihoods(X, weights, means, precisions_chol):

@@ -189,7 +189,9 @@ class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
         source = check.as_transfer_input(self, source)
         blocks = gmm.Responsibilities(self.weights_, self.means_, self.precisions_cholesky_)
         gammas = ((rows, gamma) for rows, gamma, _ in blocks.blocks(self._cluster_space(source)))
-        return mix_local_maps(source, gammas, self.coef_, self.intercept_)
+        with np.errstate(over="ignore", invalid="ignore"):   # checked: finite_transfer
+            mapped = mix_local_maps(source, gammas, self.coef_, self.intercept_)
+        return check.finite_transfer(mapped, source)
 
 
 def mix_local_maps(source, gamma_blocks, coef, intercept, path=None):

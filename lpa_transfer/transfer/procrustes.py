@@ -137,4 +137,6 @@ class ProcrustesAnalysis(SavableModel, BaseEstimator):
     def transfer(self, source):
         """Map source points (M, D_s) into the target domain (M, D_t) (Alg. 2)."""
         source = check.as_transfer_input(self, source)
-        return source @ self.coef_.T + self.intercept_
+        with np.errstate(over="ignore", invalid="ignore"):   # checked: finite_transfer
+            mapped = source @ self.coef_.T + self.intercept_
+        return check.finite_transfer(mapped, source)
