@@ -23,6 +23,9 @@ from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, q
                                           qos_to_dict, array_parameter)
 
 DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
+#: s: the longest a received message waits in memory before it is in the file (a SIGKILL
+#: loses at most about this much; compression works per chunk, so shorter costs ratio)
+FLUSH_PERIOD = 0.25
 
 
 class Recorder(Node):
@@ -40,13 +43,14 @@ class Recorder(Node):
         self.qos_depth = self.declare_parameter("qos_depth", 1000).value
         period = self.declare_parameter("discovery_period", 0.5).value
         try:
-            self.bag = BagWriter(output)
+            self.bag = BagWriter(output, flush_period_s=FLUSH_PERIOD)
         except OSError as exc:
             raise ValueError(f"cannot write the bag {output!r}: {exc.strerror or exc}") from None
         self.write_error = None   # the first failed write (OSError); the node then stops
         self.subscribed = {}  # topic -> type name
         self.discover()
         self.discovery_timer = self.create_timer(period, self.discover)
+        self.flush_timer = self.create_timer(FLUSH_PERIOD / 2, self.flush)
         self.get_logger().info(f"recording to {output}")
 
     def wanted(self, topic):
@@ -81,6 +85,14 @@ class Recorder(Node):
             self.bag.write(topic, data, received_ns, header_stamp_ns(type_name, data))
         except OSError as exc:
             self.write_error = exc
+
+    def flush(self):
+        """Close the chunk in progress at least every FLUSH_PERIOD, messages arriving or not."""
+        if self.write_error is None:
+            try:
+                self.bag.flush_if_due()
+            except OSError as exc:
+                self.write_error = exc
 
     def finish(self):
         """Close the bag and log what it holds; OSError if it cannot be written."""

@@ -182,7 +182,7 @@ class BagWriter:
         self._writer = Writer(self._file, compression=compression)
         self._writer.start(profile=PROFILE, library=LIBRARY)
         self._flush_period_s = flush_period_s
-        self._last_flush = time.monotonic()
+        self._last_flush, self._pending = time.monotonic(), 0
         self._schema_ids = {}
         self._channel_ids = {}
         self.counts = Counter()
@@ -212,13 +212,21 @@ class BagWriter:
             publish_time=log_time_ns if publish_time_ns is None else publish_time_ns,
             sequence=self.counts[topic])
         self.counts[topic] += 1
+        self._pending += 1
         if time.monotonic() - self._last_flush > self._flush_period_s:
             self.flush()
 
     def flush(self):
         """Write the chunk in progress to the file (readable after a kill up to this point)."""
         self._writer.flush()
-        self._last_flush = time.monotonic()
+        self._last_flush, self._pending = time.monotonic(), 0
+
+    def flush_if_due(self):
+        """Flush if messages wait and ``flush_period_s`` has passed since the last flush: a
+        recorder calls it from a timer, so that a kill loses at most about one period even
+        when no further message arrives to trigger the flush in :meth:`write`."""
+        if self._pending and time.monotonic() - self._last_flush >= self._flush_period_s:
+            self.flush()
 
     def close(self):
         """Write the summary and footer and close the file; calling it twice is harmless."""
