@@ -17,12 +17,14 @@ import re
 import struct
 import sys
 import time
+import zlib
 from collections import Counter, namedtuple
 from pathlib import Path
 
 from mcap.exceptions import McapError
 from mcap.reader import NonSeekingReader, make_reader
 from mcap.writer import CompressionType, Writer
+from zstandard import ZstdError
 
 PROFILE = "ros2"
 SCHEMA_ENCODING = "ros2msg"
@@ -246,13 +248,43 @@ class BagWriter:
 
 # ----------------------------------------------------------------------------- reading
 
+#: What a damaged file raises while it is read: mcap's errors (CRC mismatch, bad records),
+#: zstd's, the struct/EOF/value errors of a record cut short, and what a corrupt length does.
+_READ_ERRORS = (McapError, ZstdError, EOFError, struct.error, ValueError, RuntimeError, KeyError,
+                MemoryError, OverflowError)     # (a flipped length field asks for too much)
+
+
+def _check_summary_crc(stream, path):
+    """The footer's CRC of the summary section (chunk and message indexes, statistics): a
+    flipped index would send the reader to the wrong chunk without any chunk CRC failing."""
+    try:
+        size = stream.seek(0, os.SEEK_END)
+        if size < 8 + 29 + 8:
+            return                                  # too short to be finalised: get_summary says
+        stream.seek(size - 8 - 29)                  # the footer record, then the magic
+        footer = stream.read(29)
+        if footer[0] != 0x02:
+            return
+        summary_start, _, crc = struct.unpack("<QQI", footer[9:29])
+        if crc and 0 < summary_start < size - 8 - 29:
+            stream.seek(summary_start)
+            covered = stream.read(size - 8 - 29 + 25 - summary_start)
+            if zlib.crc32(covered) != crc:
+                raise BagError(f"{path}: the summary section (indexes, statistics) fails its "
+                               "CRC: the file is damaged")
+    finally:
+        stream.seek(0)
+
+
 def _open_reader(stream, path):
-    reader = make_reader(stream)
+    _check_summary_crc(stream, path)
+    reader = make_reader(stream, validate_crcs=True)
     try:
         summary = reader.get_summary()
-    except (McapError, EOFError, struct.error, ValueError) as error:
-        raise BagError(f"{path}: not a complete MCAP file ({error}); it may be truncated, e.g. "
-                       "by a killed recorder; read it with allow_truncated=True") from error
+    except _READ_ERRORS as error:
+        raise BagError(f"{path}: not a complete MCAP file ({type(error).__name__}: {error}); it "
+                       "may be truncated, e.g. by a killed recorder: recover it with "
+                       "`python -m lpa_transfer.recording.bag --recover IN OUT`") from error
     if summary is None:
         raise BagError(f"{path}: MCAP file has no summary (not finalised); "
                        "read it with allow_truncated=True")
@@ -282,10 +314,33 @@ def read_messages(path, topics=None, allow_truncated=False):
         if allow_truncated:
             yield from _read_truncated(stream, topics)
             return
-        reader, _ = _open_reader(stream, path)
-        for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=True):
-            yield BagMessage(channel.topic, schema.name, message.data, message.log_time,
-                             message.publish_time)
+        reader, info = _open_reader(stream, path)
+        ours = reader.get_header().library == LIBRARY
+        count, last, sequences = 0, None, Counter()
+        try:
+            for schema, channel, message in reader.iter_messages(topics=topics,
+                                                                 log_time_order=True):
+                count, last = count + 1, (channel.topic, message.log_time)
+                if ours and message.sequence != sequences[channel.id]:
+                    # our writer numbers each topic's messages 0, 1, 2, ... (BagWriter.write)
+                    raise BagError(f"{path}: message {sequences[channel.id]} of {channel.topic} "
+                                   f"is missing or out of place (read sequence "
+                                   f"{message.sequence}): the file is damaged")
+                sequences[channel.id] += 1
+                yield BagMessage(channel.topic, schema.name, message.data, message.log_time,
+                                 message.publish_time)
+            expected = info.statistics.channel_message_counts if info.statistics else {}
+            short = {info.channels[i].topic: (sequences[i], n) for i, n in expected.items()
+                     if ours and (topics is None or info.channels[i].topic in topics)
+                     and sequences[i] != n}
+            if short:
+                raise BagError(f"{path}: messages read per topic differ from the file's "
+                               f"statistics (read, recorded): {short}: the file is damaged")
+        except _READ_ERRORS as error:
+            where = (f"after {count} messages (the last good one on {last[0]} at log time "
+                     f"{last[1]} ns)" if last else "before its first message")
+            raise BagError(f"{path}: corrupt data {where}, at byte {stream.tell()} of the "
+                           f"file: {type(error).__name__}: {error}") from None
 
 
 def _read_truncated(stream, topics):
@@ -295,7 +350,7 @@ def _read_truncated(stream, topics):
         for schema, channel, message in messages:
             yield BagMessage(channel.topic, schema.name, message.data, message.log_time,
                              message.publish_time)
-    except (McapError, EOFError, struct.error, ValueError):
+    except _READ_ERRORS:
         return  # the file ends inside a record: everything complete has been yielded
 
 
@@ -312,7 +367,48 @@ def describe(path):
     return "\n".join(lines) + "\n"
 
 
+def recover(path, output):
+    """Write every complete message of a truncated or killed recording at ``path`` into a
+    finalised bag at ``output`` (topics, types and offered QoS kept); returns the count."""
+    import yaml
+
+    count = 0
+    with BagWriter(output) as writer, open(path, "rb") as stream:
+        for message in _read_truncated_with_channels(stream):
+            schema, channel, record = message
+            writer.add_topic(channel.topic, schema.name,
+                             yaml.safe_load(channel.metadata.get("offered_qos_profiles") or "[]")
+                             or [])
+            writer.write(channel.topic, record.data, record.log_time, record.publish_time)
+            count += 1
+    return count
+
+
+def _read_truncated_with_channels(stream):
+    messages = NonSeekingReader(stream, validate_crcs=True).iter_messages(log_time_order=False)
+    try:
+        yield from messages
+    except _READ_ERRORS:
+        return
+
+
+def main(argv):
+    """``python -m lpa_transfer.recording.bag FILE.mcap ...``: the stand-in for ``ros2 bag
+    info``; ``--recover IN OUT``: a finalised copy of a killed recording's complete messages."""
+    if argv[:1] == ["--recover"]:
+        if len(argv) != 3:
+            print("usage: python -m lpa_transfer.recording.bag --recover IN OUT", file=sys.stderr)
+            return 2
+        print(f"recovered {recover(argv[1], argv[2])} messages into {argv[2]}")
+        return 0
+    for argument in argv:
+        try:
+            print(describe(argument), end="")
+        except (BagError, OSError) as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 1
+    return 0
+
+
 if __name__ == "__main__":
-    # python -m lpa_transfer.recording.bag FILE.mcap ...: the stand-in for `ros2 bag info`.
-    for argument in sys.argv[1:]:
-        print(describe(argument), end="")
+    sys.exit(main(sys.argv[1:]))
