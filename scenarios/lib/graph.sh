@@ -44,9 +44,18 @@ PY
 # stops them in order: the running step first, then the nodes in reverse start order, the
 # recorder last, so the bag holds everything the others published.
 PIDS=() NAMES=() CURRENT=""
+# LPA_HOSTS (set by scenarios/multi_host/run.sh): "NAME=NETNS ..." runs node or step NAME in
+# that network namespace (ip netns exec keeps the PID, so stopping works as on one host), with
+# the environment of LPA_HOST_ENV (e.g. discovery over the namespaces' subnet).
+on_host() {   # on_host NAME: the command prefix that puts NAME on its host ('' on this one)
+    local entry
+    for entry in ${LPA_HOSTS:-}; do
+        if [ "${entry%%=*}" = "$1" ]; then echo "ip netns exec ${entry#*=} env ${LPA_HOST_ENV:-}"; return; fi
+    done
+}
 start() {   # start NAME MODULE ARGS...: a node in the background, its output in logs/NAME.log
     local name=$1 module=$2; shift 2
-    setsid python -m "lpa_transfer_nodes.$module" "$@" >"$OUT/logs/$name.log" 2>&1 &
+    setsid $(on_host "$name") python -m "lpa_transfer_nodes.$module" "$@" >"$OUT/logs/$name.log" 2>&1 &
     PIDS+=($!) NAMES+=("$name")
 }
 FAILED=0
@@ -73,9 +82,9 @@ step() {   # step NAME COMMAND...: one step with its own log, waited for (so Ctr
     local name=$1; shift
     echo "[$(date +%T)] $name" >&2
     if [ $PROGRESS = 1 ]; then
-        setsid "$@" > >(tee "$OUT/logs/$name.log") 2>&1 &
+        setsid $(on_host "$name") "$@" > >(tee "$OUT/logs/$name.log") 2>&1 &
     else
-        setsid "$@" >"$OUT/logs/$name.log" 2>&1 &
+        setsid $(on_host "$name") "$@" >"$OUT/logs/$name.log" 2>&1 &
     fi
     CURRENT=$! CURRENT_NAME=$name
     local code=0; wait "$CURRENT" || code=$?

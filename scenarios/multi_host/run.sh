@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# The node graph over three network "hosts": Linux network namespaces joined by a bridge that
+# lives in a fourth, "switch" namespace (issue 30). robots: the two robot_sims; mapping:
+# lpa_mapping; learners: the collector, the evaluation and the recorder. The 2-link graph
+# scenario (scenarios/two_link_graph/run.sh) runs unchanged, each node on its host.
+#
+# Usage (as root): scenarios/multi_host/run.sh [--link-down HOST AFTER SECONDS]
+#                  [two_link_graph run.sh arguments...]
+#   e.g. --config scenarios/two_link_graph/smoke.yaml --out runs/multi_host
+#   --link-down rob 1.5 2: the robots host's link goes down 1.5 s after the collection step
+#   started, for 2 s (a fault; hosts: rob, map, lrn). Leaves topology.txt in the run directory: each host's
+#   routes, this machine's own links, and the bytes each bridge port carried.
+# Without root or network namespaces it says so in one line and exits 77 (skip).
+#
+# Network safety: the namespaces get addresses on 10.231.0.0/24 only, no default route and
+# no route out; the bridge is in the switch namespace, attached to no interface of this
+# machine's own namespace, so no packet of the run can leave the namespaces made here. DDS
+# discovers over that subnet (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET: multicast on the bridge,
+# routed there by a 224.0.0.0/4 route on each host's own interface), and uses UDP only
+# (FASTDDS_BUILTIN_TRANSPORTS=UDPv4: shared memory would join processes on one machine
+# behind the network's back). Everything is removed at the end, after Ctrl-C or a failure.
+set -uo pipefail
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+ROOT=$(cd "$HERE/../.." && pwd)
+if [ "$(id -u)" != 0 ] || ! ip netns list >/dev/null 2>&1; then
+    echo "skipped: network namespaces need root and iproute2's ip netns" >&2; exit 77
+fi
+LINK_DOWN=()
+if [ "${1:-}" = --link-down ]; then LINK_DOWN=("$2" "$3" "$4"); shift 4; fi
+PREFIX=lpa$$
+SWITCH=${PREFIX}sw
+declare -A ADDRESS=([rob]=10.231.0.1 [map]=10.231.0.2 [lrn]=10.231.0.3)
+TOPOLOGY=$(mktemp)
+cleanup() {
+    if [ -n "${OUT:-}" ] && [ -d "$OUT" ]; then
+        { echo "== bridge ports (bytes each carried)"; ip -n "$SWITCH" -s -o link show; } >>"$TOPOLOGY"
+        cp "$TOPOLOGY" "$OUT/topology.txt"
+    fi
+    [ -n "${FAULT:-}" ] && kill "$FAULT" 2>/dev/null
+    for host in "${!ADDRESS[@]}"; do ip netns del "$PREFIX$host" 2>/dev/null; done
+    ip netns del "$SWITCH" 2>/dev/null
+    rm -f "$TOPOLOGY"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+set -e
+ip netns add "$SWITCH"
+ip -n "$SWITCH" link add br0 type bridge
+ip -n "$SWITCH" link set br0 up
+for host in "${!ADDRESS[@]}"; do
+    ns=$PREFIX$host
+    ip netns add "$ns"
+    ip link add "$ns-s" netns "$SWITCH" type veth peer name eth0 netns "$ns"
+    ip -n "$SWITCH" link set "$ns-s" master br0 up
+    ip -n "$ns" link set lo up
+    ip -n "$ns" addr add "${ADDRESS[$host]}/24" dev eth0
+    ip -n "$ns" link set eth0 up
+    ip -n "$ns" route add 224.0.0.0/4 dev eth0       # multicast discovery, on the bridge only
+    { echo "== $ns routes"; ip -n "$ns" route show; } >>"$TOPOLOGY"
+done
+{ echo "== root namespace links"; ip -o link show; } >>"$TOPOLOGY"
+set +e
+
+export LPA_HOSTS="source_sim=${PREFIX}rob target_sim=${PREFIX}rob lpa_mapping=${PREFIX}map
+    recorder=${PREFIX}lrn correspondence_collector=${PREFIX}lrn transfer_evaluation=${PREFIX}lrn"
+export LPA_HOST_ENV="ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET FASTDDS_BUILTIN_TRANSPORTS=UDPv4"
+OUT=$(python3 - "$ROOT" "$@" <<'PY'
+import os, sys
+root, args = sys.argv[1], sys.argv[2:]
+print(os.path.realpath(args[args.index("--out") + 1]) if "--out" in args
+      else os.path.join(root, "runs", "two_link_graph"))
+PY
+)
+if [ ${#LINK_DOWN[@]} = 3 ]; then
+    (until [ -e "$OUT/logs/correspondence_collector.log" ]; do sleep 0.1; done
+     sleep "${LINK_DOWN[1]}"; ip -n "$PREFIX${LINK_DOWN[0]}" link set eth0 down
+     echo "[$(date +%T)] fault: host ${LINK_DOWN[0]} link down for ${LINK_DOWN[2]} s" >&2
+     sleep "${LINK_DOWN[2]}"; ip -n "$PREFIX${LINK_DOWN[0]}" link set eth0 up
+     ip -n "$PREFIX${LINK_DOWN[0]}" route add 224.0.0.0/4 dev eth0 2>/dev/null
+     echo "[$(date +%T)] fault: host ${LINK_DOWN[0]} link up again" >&2) &
+    FAULT=$!
+fi
+bash "$ROOT/scenarios/two_link_graph/run.sh" "$@"
+exit $?

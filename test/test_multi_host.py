@@ -1,0 +1,74 @@
+"""The 2-link graph over three network namespaces (scenarios/multi_host/run.sh, issue 30):
+the same results as on one host, every topic recorded, no route out, and a link that goes
+down for 2 s mid-collection ridden out. Skipped, with the script's one-line reason, where
+network namespaces cannot be made (not root, no ip netns)."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from lpa_transfer.recording.bag import summary
+from lpa_transfer_nodes.testing import run_scenario, unique_domain_id
+
+SCRIPT = ROOT / "scenarios" / "multi_host" / "run.sh"
+SMOKE = ROOT / "scenarios" / "two_link_graph" / "smoke.yaml"
+pytestmark = pytest.mark.timeout(600)
+
+
+def multi_host(out, *extra):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
+    result = subprocess.run(["bash", str(SCRIPT), *extra, "--config", str(SMOKE), "--out",
+                             str(out)], env=env, capture_output=True, text=True, timeout=400)
+    if result.returncode == 77:
+        pytest.skip(result.stderr.strip())
+    assert result.returncode == 0, result.stdout + result.stderr
+    return result
+
+
+@pytest.fixture(scope="module")
+def one_host(tmp_path_factory):
+    out = tmp_path_factory.mktemp("one_host") / "run"
+    result = run_scenario(ROOT / "scenarios" / "two_link_graph", out, timeout=240)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return out
+
+
+def same_results(out, reference):
+    evaluation = json.loads((out / "evaluation.json").read_text())
+    expected = json.loads((reference / "evaluation.json").read_text())
+    for key in ("mapping_rmse_m", "model_rmse_m", "n_correspondences", "n_experience"):
+        assert evaluation[key] == expected[key], key
+    with np.load(out / "correspondences.npz") as pairs, \
+            np.load(reference / "correspondences.npz") as expected_pairs:
+        for key in ("source", "target"):
+            assert np.array_equal(pairs[key], expected_pairs[key])
+
+
+def test_three_hosts_give_the_one_host_results_and_record_every_topic(tmp_path, one_host):
+    out = tmp_path / "run"
+    multi_host(out)
+    same_results(out, one_host)
+    assert sorted(summary(out / "run.mcap")) == sorted(summary(one_host / "run.mcap"))
+    topology = (out / "topology.txt").read_text()
+    host_routes = topology.split("== root namespace links")[0]
+    assert "default" not in host_routes                          # no route out of any host
+    assert "10.231.0.1" in host_routes and "10.231.0.3" in host_routes
+    root_links = topology.split("== root namespace links")[1].split("== bridge ports")[0]
+    assert "lpa" not in root_links                               # nothing of ours out here
+    ports = [line for line in topology.split("== bridge ports")[1].splitlines()
+             if "master br0" in line]
+    assert len(ports) == 3                                       # the traffic crossed the bridge
+    prefix = topology.split("== ")[1].split()[0][:-3]            # lpa<pid>
+    left = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+    assert prefix not in left                                    # removed at the end
+
+
+def test_a_robots_host_link_down_for_2_s_is_ridden_out(tmp_path, one_host):
+    out = tmp_path / "run"
+    result = multi_host(out, "--link-down", "rob", "0.5", "2")
+    assert "fault: host rob link down for 2 s" in result.stderr
+    assert "fault: host rob link up again" in result.stderr
+    same_results(out, one_host)
