@@ -54,7 +54,7 @@ from lpa_transfer.robots.control import PID
 from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner, make_regressor
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
-from id_transfer_headroom import CONFIG, StarRobot, babble
+from bench.id_transfer_headroom import CONFIG, StarRobot, babble
 
 
 def parse_variant(text):

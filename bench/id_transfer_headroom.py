@@ -42,7 +42,7 @@ from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer.inverse_dynamics.tasks import star_task
 
-from id_mapping_quality import held_out_predictions   # the same held-out blocks
+from bench.id_mapping_quality import held_out_predictions   # the same held-out blocks
 
 CONFIG = Path("scenarios/inverse_dynamics/config.yaml")
 MOVING = 1e-3          # a column whose spread is below this is a joint the babbling leaves still

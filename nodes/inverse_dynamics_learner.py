@@ -85,7 +85,8 @@ class InverseDynamicsLearner(Node):
         self.centre_pose = kinematics.home
         return star_task(kinematics, declare("star_radius", 0.05), self.dt, doubles("star_u"),
                          doubles("star_v"), declare("star_spread", 2 * np.pi),
-                         declare("star_start_angle", 0.0))
+                         declare("star_start_angle", 0.0),
+                         time_law=declare("star_time_law", "minimum_jerk"))
 
     def fresh_learner(self, pid):
         """A learner that knows nothing yet: a new regressor of the configured kind."""

@@ -127,3 +127,21 @@ def test_pid_servo_torques_do_not_depend_on_how_long_the_clock_has_run():
     assert reference[2] == pytest.approx(1.0 * 0.2 + 1.0 * (0.2 - 0.3) / 0.01)
     for start_steps in (14400, 57600, 1000003):
         np.testing.assert_array_equal(torques_from(start_steps), reference)
+
+
+def test_linear_star_legs_run_at_constant_speed_and_minimum_jerk_stays_the_default():
+    """Issue 26 factor 1: ``time_law="linear"`` moves along each 0.6 s leg at constant speed
+    (the speed jumps at the centre and the tips); the default is unchanged."""
+    centre = np.array([0.3, 0.4])
+    linear = star_trajectory(centre, [1, 0], [0, 1], 0.05, DT, time_law="linear")
+    default = star_trajectory(centre, [1, 0], [0, 1], 0.05, DT)
+    assert np.array_equal(default, star_trajectory(centre, [1, 0], [0, 1], 0.05, DT,
+                                                   time_law="minimum_jerk"))
+    n_leg = 60
+    first_leg = np.vstack((centre, linear[:n_leg]))
+    steps = np.linalg.norm(np.diff(first_leg, axis=0), axis=1)
+    np.testing.assert_allclose(steps, 0.05 / n_leg, rtol=1e-9)       # equal steps: constant
+    np.testing.assert_allclose(linear[n_leg - 1], default[n_leg - 1])  # both reach the tip
+    assert not np.allclose(linear, default)
+    with pytest.raises(ValueError, match="time_law must be one of"):
+        star_trajectory(centre, [1, 0], [0, 1], 0.05, DT, time_law="cubic")

@@ -2,9 +2,11 @@
 
 §5.5.1: each star is 7 straight lines from a centre; a trial follows every line out from the
 centre and back, 0.6 s each way (1.2 s a line, 8.4 s a trial). The thesis does not give the
-time law along a line; here each leg uses the minimum-jerk profile s(τ) = 10τ³ − 15τ⁴ + 6τ⁵
-(τ = t / 0.6 s), which starts and ends at rest, so the desired joint accelerations stay finite
-while still peaking high mid-leg ("components of high acceleration").
+time law along a line (``time_law``): by default each leg uses the minimum-jerk profile
+s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ (τ = t / 0.6 s), which starts and ends at rest, so the desired joint
+accelerations stay finite while still peaking high mid-leg; ``"linear"`` runs each leg at
+constant speed, as a straight reading of "each line 0.6 s out and 0.6 s back" with
+"components of high acceleration" suggests (the velocity jumps at the centre and the tips).
 
 The task is placed in a robot's workspace by its centre, the plane it lies in (two
 orthonormal directions ``u``, ``v``) and its radius; the 7 line directions are spread evenly
@@ -33,15 +35,28 @@ def star_tips(centre, u, v, radius, n_lines=N_LINES, spread=2 * np.pi, start_ang
     return centre + radius * (np.cos(angles)[:, None] * u + np.sin(angles)[:, None] * v)
 
 
+TIME_LAWS = ("minimum_jerk", "linear")
+
+
+def leg_profile(n_samples, time_law="minimum_jerk"):
+    """s(τ) ∈ (0, 1] at τ = 1/n … 1 along a leg: ``"minimum_jerk"`` or ``"linear"`` (constant
+    speed)."""
+    if time_law == "minimum_jerk":
+        return minimum_jerk(n_samples)
+    if time_law == "linear":
+        return np.arange(1, n_samples + 1) / n_samples
+    raise ValueError(f"time_law must be one of {TIME_LAWS}, got {time_law!r}")
+
+
 def star_trajectory(centre, u, v, radius, dt, n_lines=N_LINES, spread=2 * np.pi,
-                    start_angle=0.0, leg_duration=LEG_DURATION):
+                    start_angle=0.0, leg_duration=LEG_DURATION, time_law="minimum_jerk"):
     """Desired task-space positions of one trial, one row per control period ``dt``, starting
     one period after the centre: (n_lines · 2 · leg_duration / dt, m)."""
     n_leg = int(round(leg_duration / dt))
     if n_leg < 1:
         raise ValueError(f"dt = {dt} s is longer than a leg ({leg_duration} s)")
     centre = np.asarray(centre, dtype=np.float64)
-    s = minimum_jerk(n_leg)[:, None]
+    s = leg_profile(n_leg, time_law)[:, None]
     legs = []
     for tip in star_tips(centre, u, v, radius, n_lines, spread, start_angle):
         legs += [centre + s * (tip - centre), tip + s * (centre - tip)]
@@ -70,11 +85,12 @@ def tracking_error(desired, actual):
 
 
 def star_task(kinematics, radius, dt, u=None, v=None, spread=2 * np.pi, start_angle=0.0,
-              tolerance=1e-3):
+              tolerance=1e-3, time_law="minimum_jerk"):
     """One trial of a star (§5.5.1) around the end effector at ``kinematics.home``, from rest
     there: ``(q_d, q̇_d, q̈_d, x_d)``, T rows each (the centre itself not included).
 
-    ``u``, ``v``: the star's plane (default world x and y). ValueError when the inverse
+    ``u``, ``v``: the star's plane (default world x and y); ``time_law``: along each leg
+    (:func:`leg_profile`). ValueError when the inverse
     kinematics misses a star point by more than ``tolerance`` (m): the star leaves the
     workspace.
     """
@@ -82,7 +98,8 @@ def star_task(kinematics, radius, dt, u=None, v=None, spread=2 * np.pi, start_an
     dims = len(centre)
     u = np.eye(dims)[0] if u is None or not len(u) else u
     v = np.eye(dims)[1] if v is None or not len(v) else v
-    x_d = star_trajectory(centre, u, v, radius, dt, spread=spread, start_angle=start_angle)
+    x_d = star_trajectory(centre, u, v, radius, dt, spread=spread, start_angle=start_angle,
+                          time_law=time_law)
     q, qd, qdd, residuals = joint_trajectory(kinematics, np.vstack((centre, x_d)),
                                              kinematics.home, dt)
     if residuals.max() > tolerance:

@@ -1,0 +1,56 @@
+"""Chapter 5 set-up factor 1 (issue 26): learning from scratch with the star legs' time law
+minimum-jerk (today's default) against constant speed ("linear"), in process.
+
+    nice -n 10 python -m bench.id_time_law [--trials 15] [--targets youbot pincher]
+
+For each robot and star of scenarios/inverse_dynamics/config.yaml, a learner from scratch
+(uninitialised, today's LWPR settings) tracks the star for ``--trials`` trials from rest at
+its centre (bench/id_transfer_headroom.py's StarRobot: the same simulator, PID and LWPR as the
+graph). Printed: first and last trial's tracking error (mm), the trial from which the curve
+stays within 10 % of its own last trial (the scenario's convergence rule, with the learner's
+own final error as the reference), and the largest |τ| the first trial applied per joint.
+"""
+import argparse
+
+import numpy as np
+import yaml
+
+from bench.id_transfer_headroom import CONFIG, StarRobot
+from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
+from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
+
+
+def scratch(config, name, star, time_law, n_trials):
+    robot = StarRobot(config, name, star)
+    node = config[f"/{name}/{star}"]["ros__parameters"]
+    robot.trajectory = star_task(robot.kinematics, node["star_radius"], robot.dt,
+                                 start_angle=node["star_start_angle"], time_law=time_law)
+    learner = robot.learner()
+    errors, experience = robot.trials(learner, n_trials)
+    n = robot.params.n_joints
+    first_torque = np.abs(experience[:len(robot.trajectory[0]), 3 * n:]).max(axis=0)
+    robot.sim.close()
+    return np.array(errors), first_torque
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=15)
+    parser.add_argument("--targets", nargs="+", default=["youbot", "pincher"])
+    parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
+    args = parser.parse_args(argv)
+    config = yaml.safe_load(CONFIG.read_text())
+    print(f"{'robot/star':<16} {'time law':<13} {'trial 1':>8} {'last':>7} {'converged':>9}  "
+          "max |tau| in trial 1 (N m, per joint)")
+    for name in args.targets:
+        for star in args.stars:
+            for time_law in TIME_LAWS:
+                errors, torque = scratch(config, name, star, time_law, args.trials)
+                converged = trials_to_convergence(errors, errors[-1], 0.1)
+                print(f"{name + '/' + star:<16} {time_law:<13} {1e3 * errors[0]:8.2f} "
+                      f"{1e3 * errors[-1]:7.2f} {converged:9d}  "
+                      + " ".join(f"{t:6.2f}" for t in torque), flush=True)
+
+
+if __name__ == "__main__":
+    main()
