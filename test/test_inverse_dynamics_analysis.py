@@ -199,3 +199,21 @@ def test_merging_runs_with_start_noise_checks_that_scratch_varies_by_seed(tmp_pa
     with pytest.raises(ValueError, match="learn from scratch differently, which runs with "
                                          "start_noise 0 cannot"):
         merge([tmp_path / "quiet", tmp_path / "noisy_ref"])
+
+
+def test_the_plateau_rule_judges_each_curve_by_its_own_end():
+    """Issue 26 factor 7: a curve still falling at the end has not converged within the
+    budget ("> n"); a levelled curve converges where it enters its own final band."""
+    from lpa_transfer.inverse_dynamics.analysis import convergence_table, trials_to_plateau
+
+    levelled = [10.0, 6.0, 3.0, 2.05, 2.02, 2.0, 2.01, 2.0]
+    falling = [10.0, 8.0, 6.5, 5.0, 4.0, 3.2, 2.6, 2.1]
+    assert trials_to_plateau(levelled, 0.1) == 4
+    assert trials_to_plateau(falling, 0.1) == len(falling) + 1
+    assert trials_to_plateau(falling, 0.6) == 6          # its last 3 within 60 %
+    curves = {"youbot/star1/uninitialised": [falling], "youbot/star1/random": [levelled]}
+    rows, savings = convergence_table(curves, ["youbot"], ["star1"], 0.1, 0.0, rule="plateau")
+    assert [row[3] for row in rows] == [9, 4]
+    assert savings["youbot"]["random"] == pytest.approx(1 - 4 / 9)
+    with pytest.raises(ValueError, match="rule must be"):
+        convergence_table(curves, ["youbot"], ["star1"], 0.1, 0.0, rule="slope")

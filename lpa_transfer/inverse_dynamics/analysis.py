@@ -30,6 +30,23 @@ def trials_to_convergence(curve, reference_final, tolerance, stay=True):
     return 1 if len(above) == 0 else int(above[-1]) + 2
 
 
+#: Trials at the end of a curve that must lie within the tolerance of one another for the
+#: plateau rule to call it levelled off.
+PLATEAU_WINDOW = 3
+
+
+def trials_to_plateau(curve, tolerance, window=PLATEAU_WINDOW):
+    """The per-curve plateau rule (our reading of §5.5.3's "> 20 trials"): the first trial
+    (1-based) from which the curve stays within (1 + tolerance) of its own final error, if its
+    last ``window`` trials lie within that band of their smallest (it has levelled off);
+    len(curve) + 1 ("more than the budget") when it is still falling at the end."""
+    curve = np.asarray(curve)
+    tail = curve[-window:]
+    if tail.max() > (1 + tolerance) * tail.min():
+        return len(curve) + 1
+    return trials_to_convergence(curve, curve[-1], tolerance)
+
+
 def conditions_in(curves):
     """The CONDITIONS that ``curves`` holds, in their order (results written before a
     condition existed lack it)."""
@@ -37,10 +54,15 @@ def conditions_in(curves):
     return [c for c in CONDITIONS if c in present]
 
 
-def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=True):
+def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=True,
+                      rule="scratch"):
     """Per target robot: trials to convergence per star and condition (mean curves; ``stay``
     as in :func:`trials_to_convergence`), and the training time saved against learning from
-    scratch, as §5.5.3 computes it."""
+    scratch, as §5.5.3 computes it. ``rule``: "scratch" (within ``tolerance`` of learning from
+    scratch's final error) or "plateau" (each curve by its own plateau,
+    :func:`trials_to_plateau`)."""
+    if rule not in ("scratch", "plateau"):
+        raise ValueError(f"rule must be 'scratch' or 'plateau', got {rule!r}")
     rows, savings, conditions = [], {}, conditions_in(curves)
     for robot in robots:
         seconds = {c: 0.0 for c in conditions}
@@ -48,7 +70,8 @@ def convergence_table(curves, robots, stars, tolerance, babbling_seconds, stay=T
             mean = {c: np.mean(curves[f"{robot}/{star}/{c}"], axis=0) for c in conditions}
             final = mean["uninitialised"][-1]
             for condition in conditions:
-                k = trials_to_convergence(mean[condition], final, tolerance, stay)
+                k = (trials_to_convergence(mean[condition], final, tolerance, stay)
+                     if rule == "scratch" else trials_to_plateau(mean[condition], tolerance))
                 rows.append((robot, star, condition, k, len(mean[condition])))
                 seconds[condition] += k * TRIAL_SECONDS
         for condition in conditions[1:]:

@@ -14,7 +14,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import ScalarFormatter
 
-from lpa_transfer.inverse_dynamics.analysis import (TRIAL_SECONDS, bootstrap_savings,
+from lpa_transfer.inverse_dynamics.analysis import (PLATEAU_WINDOW, TRIAL_SECONDS,
+                                                    bootstrap_savings,
                                                     conditions_in, convergence_table,
                                                     paired_against, simulated_seconds)
 
@@ -66,6 +67,7 @@ def write_outputs(curves, traces, experiment, out):
             experiment.babbling_seconds)
     rows, savings = convergence_table(*args)
     first_rows, first_savings = convergence_table(*args, stay=False)
+    plateau_rows, plateau_savings = convergence_table(*args, rule="plateau")
     intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
     other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
                                   experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
@@ -93,6 +95,12 @@ def write_outputs(curves, traces, experiment, out):
                                                 for c, v in savings[robot].items()))
         lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
                                                     for c, v in first_savings[robot].items()))
+        plateaus = ", ".join(f"{s} {c} {k if k <= n else f'> {n}'}"
+                             for r, s, c, k, n in plateau_rows if r == robot)
+        lines.append(f"  each curve by its own plateau (within {experiment.tolerance:.0%} of its "
+                     f"own final error, its last {PLATEAU_WINDOW} trials levelled off): "
+                     + ", ".join(f"{c} {100 * v:.1f}%" for c, v in plateau_savings[robot].items())
+                     + f"; trials: {plateaus}")
         lines.append(f"  converged within {' / '.join(f'{t:.0%}' for t in OTHER_TOLERANCES)} "
                      f"of scratch's final error instead: " + ", ".join(
                          f"{c} " + " / ".join(f"{100 * other[t][robot][c]:.1f}"
