@@ -433,3 +433,26 @@ def test_equals_the_reference_with_15_inputs_and_5_outputs():
     for got, want in zip(new.receptive_fields_, ref.receptive_fields_):
         for name in ARRAYS:
             assert_close(got[name], want[name], name)
+
+
+def test_empty_prediction_zero_answers_0_where_no_field_is_active():
+    """Issue 26 factor 6: the authors' library predicts 0 where no receptive field is active;
+    ours (default "nearest") the nearest field's offset. Inside the data both agree, also for
+    the prediction made before learning in update()."""
+    rng = np.random.default_rng(0)
+    X = rng.uniform(-1, 1, size=(300, 2))
+    Y = np.column_stack((np.sin(X[:, 0]) + 2.0, X[:, 1] ** 2 - 1.0))
+    models = {rule: LWPR(init_D=50.0, norm_in=1.0, norm_out=1.0, empty_prediction=rule)
+              for rule in ("nearest", "zero")}
+    for model in models.values():
+        model.fit(X, Y)
+    far = np.array([[8.0, 8.0]])
+    np.testing.assert_array_equal(models["zero"].predict(far), [[0.0, 0.0]])
+    assert np.abs(models["nearest"].predict(far)).min() > 0.1
+    inside = X[:20]
+    np.testing.assert_array_equal(models["zero"].predict(inside), models["nearest"].predict(inside))
+    assert np.array_equal(models["zero"].update(far[0], [0.0, 0.0]), [0.0, 0.0])
+    default = LWPR(init_D=50.0, norm_in=1.0, norm_out=1.0).fit(X, Y)
+    np.testing.assert_array_equal(default.predict(far), models["nearest"].predict(far))
+    with pytest.raises(ValueError, match="empty_prediction must be"):
+        LWPR(empty_prediction="mean").fit(X, Y)

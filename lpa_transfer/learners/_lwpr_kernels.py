@@ -58,7 +58,8 @@ BETA0, SUM_E2, SSP = range(3)
 LO, HI, MM = range(3)
 # params entries
 (P_W_GEN, P_W_PRUNE, P_INIT_LAMBDA, P_FINAL_LAMBDA, P_TAU_LAMBDA, P_GAMMA, P_META_RATE,
- P_ADD_THRESHOLD, P_INIT_S2, P_UPDATE_D, P_META, P_DIAG, P_N_PROJ_MAX, N_PARAMS) = range(14)
+ P_ADD_THRESHOLD, P_INIT_S2, P_UPDATE_D, P_META, P_DIAG, P_N_PROJ_MAX, P_ZERO_EMPTY,
+ N_PARAMS) = range(15)
 
 #: RFs per bounding box (``boxes``); capacities are multiples of it.
 BLOCK = 32
@@ -184,9 +185,10 @@ def _activations(x, n, points, metric, boxes, diag, q_max, near, act):
 # ------------------------------------------------------------------------- prediction
 @njit(cache=True)
 def _combine(x, near, act, count, cutoff, n, points, metric, scalars, lin_coef, out, trust,
-             boxes, diag, Y, row, weight, best_k, best_v):
+             boxes, diag, Y, row, weight, best_k, best_v, zero_empty):
     """Y[row]: the activation-weighted mean of the predictions of the trustworthy RFs with
-    w > cutoff, per output (normalised units); outputs without one get the fallback."""
+    w > cutoff, per output (normalised units); outputs without one get the fallback, or 0
+    with ``zero_empty`` (as the authors' reference library)."""
     d = x.size
     m = Y.shape[1]
     for o in range(m):
@@ -209,7 +211,7 @@ def _combine(x, near, act, count, cutoff, n, points, metric, scalars, lin_coef, 
         else:
             Y[row, o] = 0.0
             missing = True
-    if missing:
+    if missing and not zero_empty:
         _fallback(x, near, act, count, n, points, metric, scalars, out, boxes, diag, Y, row,
                   weight, best_k, best_v)
 
@@ -261,7 +263,7 @@ def _fallback(x, near, act, count, n, points, metric, scalars, out, boxes, diag,
 
 @njit(cache=True)
 def lwpr_predict(X, n, cutoff, points, metric, scalars, lin_coef, out, trust, boxes, near,
-                 act, diag, Y):
+                 act, diag, Y, zero_empty):
     """Predictions (normalised units) for the rows of X into Y (len(X), m)."""
     m = Y.shape[1]
     weight, best_v = np.empty(m), np.empty(m)
@@ -271,7 +273,7 @@ def lwpr_predict(X, n, cutoff, points, metric, scalars, lin_coef, out, trust, bo
         x = X[i]
         count = _activations(x, n, points, metric, boxes, diag, q_max, near, act)
         _combine(x, near, act, count, cutoff, n, points, metric, scalars, lin_coef, out,
-                 trust, boxes, diag, Y, i, weight, best_k, best_v)
+                 trust, boxes, diag, Y, i, weight, best_k, best_v, zero_empty)
 
 
 @njit(cache=True)
@@ -683,6 +685,7 @@ def lwpr_learn(X, Y, start, before, n, cutoff, proj_stats, proj_axes, points, me
     S, L = proj_stats.shape[2], metric.shape[2]
     cap = out.size
     diag = params[P_DIAG] != 0.0
+    zero_empty = params[P_ZERO_EMPTY] != 0.0
     n_max = int(params[P_N_PROJ_MAX])
     w_min = min(cutoff, UPDATE_CUTOFF, params[P_W_GEN])
     q_max = -2.0 * math.log(w_min) if w_min > 0 else np.inf
@@ -697,7 +700,7 @@ def lwpr_learn(X, Y, start, before, n, cutoff, proj_stats, proj_axes, points, me
         x, y = X[i], Y[i]
         count = _activations(x, n, points, metric, boxes, diag, q_max, near, act)
         _combine(x, near, act, count, cutoff, n, points, metric, scalars, lin_coef, out,
-                 trust, boxes, diag, before, i, weight, best_k, best_v)
+                 trust, boxes, diag, before, i, weight, best_k, best_v, zero_empty)
         top = 0
         for p in range(count):
             if act[p] > UPDATE_CUTOFF:

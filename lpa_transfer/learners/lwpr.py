@@ -136,7 +136,8 @@ class _ReceptiveFields:
                              (k.P_META_RATE, cfg.meta_rate),
                              (k.P_ADD_THRESHOLD, cfg.add_threshold), (k.P_INIT_S2, cfg.init_S2),
                              (k.P_UPDATE_D, cfg.update_D), (k.P_META, cfg.meta),
-                             (k.P_DIAG, cfg.diag_only), (k.P_N_PROJ_MAX, cfg.n_proj_max)):
+                             (k.P_DIAG, cfg.diag_only), (k.P_N_PROJ_MAX, cfg.n_proj_max),
+                             (k.P_ZERO_EMPTY, cfg.zero_empty)):
             params[index] = value
         self.params = params
         self.init = np.stack((cfg.init_M.ravel(), cfg.init_alpha.ravel(),
@@ -218,7 +219,8 @@ class _ReceptiveFields:
         Y = np.empty((len(X), self.n_outputs))
         _kernels.lwpr_predict(X, self.n, float(cutoff), self.points, self.metric,
                               self.scalars, self.lin_coef, self.out, self.trust, self.boxes,
-                              self.near, self.act, self.cfg.diag_only, Y)
+                              self.near, self.act, self.cfg.diag_only, Y,
+                              getattr(self.cfg, "zero_empty", False))
         return Y
 
     def activations(self, x, w_min):
@@ -306,6 +308,11 @@ class LWPR(RegressorMixin, BaseEstimator):
     cutoff : float
         RFs activated at or below ``cutoff`` do not contribute to predictions (0: all RFs,
         but then every RF is evaluated for every query, which is slow for many RFs).
+    empty_prediction : {"nearest", "zero"}
+        The prediction of an output where no trustworthy RF is active above ``cutoff``:
+        ``"nearest"``, β0 of the most active (else the nearest) RF; ``"zero"``, 0, as the
+        authors' reference library (C and MATLAB) answers, so that until the model covers
+        an input nothing is predicted there (thesis ch. 5: the PID alone acts).
     n_epochs : int
         Passes over the data in ``fit`` (same order every pass).
 
@@ -318,7 +325,8 @@ class LWPR(RegressorMixin, BaseEstimator):
                  init_lambda=0.999, final_lambda=0.99999, tau_lambda=0.9999, penalty=1e-6,
                  update_D=True, meta=False, meta_rate=250.0, diag_only=True,
                  max_projections=None, add_threshold=0.5, init_S2=1e-10, norm_in=None,
-                 norm_out=None, kernel="gaussian", cutoff=1e-3, n_epochs=1):
+                 norm_out=None, kernel="gaussian", cutoff=1e-3, n_epochs=1,
+                 empty_prediction="nearest"):
         self.init_D = init_D
         self.init_alpha = init_alpha
         self.w_gen = w_gen
@@ -339,6 +347,7 @@ class LWPR(RegressorMixin, BaseEstimator):
         self.kernel = kernel
         self.cutoff = cutoff
         self.n_epochs = n_epochs
+        self.empty_prediction = empty_prediction
 
     # ----------------------------------------------------------------- public API
     def fit(self, X, Y):
@@ -451,6 +460,9 @@ class LWPR(RegressorMixin, BaseEstimator):
         if str(self.kernel).lower() != "gaussian":
             raise ValueError(f"kernel must be 'gaussian' (the only kernel implemented), got "
                              f"{self.kernel!r}")
+        if self.empty_prediction not in ("nearest", "zero"):
+            raise ValueError(f"empty_prediction must be 'nearest' or 'zero', got "
+                             f"{self.empty_prediction!r}")
         if self.max_projections is not None:
             check_int(self.max_projections, "max_projections", minimum=1)
         n_proj = d if self.max_projections is None else min(int(self.max_projections), d)
@@ -467,7 +479,8 @@ class LWPR(RegressorMixin, BaseEstimator):
             final_lambda=float(self.final_lambda), tau_lambda=float(self.tau_lambda),
             gamma=float(self.penalty) / d, update_D=bool(self.update_D),
             meta=bool(self.meta), meta_rate=float(self.meta_rate),
-            add_threshold=float(self.add_threshold), init_S2=max(float(self.init_S2), 1e-300))
+            add_threshold=float(self.add_threshold), init_S2=max(float(self.init_S2), 1e-300),
+            zero_empty=self.empty_prediction == "zero")
 
     def _start_or_check(self, X, Y, y_1d):
         """Start a model on the first batch; later batches must match its widths."""
