@@ -1,7 +1,11 @@
-"""Chapter 5 set-up factor 1 (issue 26): learning from scratch with the star legs' time law
-minimum-jerk (today's default) against constant speed ("linear"), in process.
+"""Chapter 5 set-up factors 1, 3 and 6 (issue 26): learning from scratch with the star legs'
+time law minimum-jerk (today's default) against constant speed ("linear"), in process, with
+today's LWPR settings or others (``--lwpr``: JSON of LWPR hyperparameters replacing the
+config's, e.g. the thesis' init_D 30 without normalisation and the reference library's
+empty prediction: '{"init_D": 30, "norm_in": 1, "empty_prediction": "zero"}').
 
     nice -n 10 python -m bench.id_time_law [--trials 15] [--targets youbot pincher]
+        [--time-laws minimum_jerk linear] [--lwpr JSON]
 
 For each robot and star of scenarios/inverse_dynamics/config.yaml, a learner from scratch
 (uninitialised, today's LWPR settings) tracks the star for ``--trials`` trials from rest at
@@ -11,6 +15,7 @@ stays within 10 % of its own last trial (the scenario's convergence rule, with t
 own final error as the reference), and the largest |τ| the first trial applied per joint.
 """
 import argparse
+import json
 
 import numpy as np
 import yaml
@@ -20,8 +25,10 @@ from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
 from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
 
 
-def scratch(config, name, star, time_law, n_trials):
+def scratch(config, name, star, time_law, n_trials, lwpr=None):
     robot = StarRobot(config, name, star)
+    if lwpr:
+        robot.regressor = (robot.regressor[0], {**robot.regressor[1], **lwpr})
     node = config[f"/{name}/{star}"]["ros__parameters"]
     robot.trajectory = star_task(robot.kinematics, node["star_radius"], robot.dt,
                                  start_angle=node["star_start_angle"], time_law=time_law)
@@ -38,14 +45,16 @@ def main(argv=None):
     parser.add_argument("--trials", type=int, default=15)
     parser.add_argument("--targets", nargs="+", default=["youbot", "pincher"])
     parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
+    parser.add_argument("--time-laws", nargs="+", default=list(TIME_LAWS))
+    parser.add_argument("--lwpr", type=json.loads, default=None)
     args = parser.parse_args(argv)
     config = yaml.safe_load(CONFIG.read_text())
     print(f"{'robot/star':<16} {'time law':<13} {'trial 1':>8} {'last':>7} {'converged':>9}  "
           "max |tau| in trial 1 (N m, per joint)")
     for name in args.targets:
         for star in args.stars:
-            for time_law in TIME_LAWS:
-                errors, torque = scratch(config, name, star, time_law, args.trials)
+            for time_law in args.time_laws:
+                errors, torque = scratch(config, name, star, time_law, args.trials, args.lwpr)
                 converged = trials_to_convergence(errors, errors[-1], 0.1)
                 print(f"{name + '/' + star:<16} {time_law:<13} {1e3 * errors[0]:8.2f} "
                       f"{1e3 * errors[-1]:7.2f} {converged:9d}  "
