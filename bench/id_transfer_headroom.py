@@ -66,6 +66,17 @@ class StarRobot:
         self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
                                   initial_positions=self.kinematics.home)
 
+    def configure(self, config, name, star, time_law=None, lwpr=None):
+        """Issue 26's switches: the star legs' time law and LWPR hyperparameters replacing the
+        config's (``lwpr``, a dict)."""
+        node = config[f"/{name}/{star}"]["ros__parameters"]
+        if time_law is not None:
+            self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
+                                        start_angle=node["star_start_angle"], time_law=time_law)
+        if lwpr:
+            self.regressor = (self.regressor[0], {**self.regressor[1], **lwpr})
+        return self
+
     def learner(self, samples=None):
         learner = FeedForwardLearner(make_regressor(self.regressor[0], **self.regressor[1]),
                                      PID.from_gains(self.pid_gains))
@@ -126,7 +137,7 @@ def against_own(robot, own_experience, samples, near=0.5):
     over the spread of the own torques (moving joints). The robot's own exact babbling
     ('random') calibrates the second figure: neighbours ``near`` apart differ that much."""
     n = robot.params.n_joints
-    scale = robot.regressor[1]["norm_in"]
+    scale = np.broadcast_to(np.asarray(robot.regressor[1]["norm_in"], dtype=float), (3 * n,))
     index = NearestNeighbors(n_neighbors=1).fit(own_experience[:, :3 * n] / scale)
     distance, nearest = index.kneighbors(samples[:, :3 * n] / scale)
     distance, nearest = distance[:, 0], nearest[:, 0]
@@ -151,13 +162,18 @@ def main(argv=None):
     parser.add_argument("--trials", type=int, default=5)
     parser.add_argument("--targets", nargs="+", default=["pincher", "youbot"])
     parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
+    parser.add_argument("--time-law", default=None, help="minimum_jerk (default) or linear")
+    parser.add_argument("--lwpr", type=json.loads, default=None,
+                        help="JSON of LWPR hyperparameters replacing the config's, both robots")
     args = parser.parse_args(argv)
     config = yaml.safe_load(args.config.read_text())
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]            # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])
     for star in args.stars:
-        robots = {name: StarRobot(config, name, star) for name in names}
+        robots = {name: StarRobot(config, name, star).configure(config, name, star,
+                                                                 args.time_law, args.lwpr)
+                  for name in names}
         pairs = dict(zip(names, babble(config, [robots[name] for name in names], star,
                                        args.seed)))
         scratch_errors, experience = {}, {}
