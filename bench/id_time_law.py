@@ -22,16 +22,11 @@ import yaml
 
 from bench.id_transfer_headroom import CONFIG, StarRobot
 from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
-from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
+from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS
 
 
 def scratch(config, name, star, time_law, n_trials, lwpr=None):
-    robot = StarRobot(config, name, star)
-    if lwpr:
-        robot.regressor = (robot.regressor[0], {**robot.regressor[1], **lwpr})
-    node = config[f"/{name}/{star}"]["ros__parameters"]
-    robot.trajectory = star_task(robot.kinematics, node["star_radius"], robot.dt,
-                                 start_angle=node["star_start_angle"], time_law=time_law)
+    robot = StarRobot(config, name, star).configure(config, name, star, time_law, lwpr)
     learner = robot.learner()
     errors, experience = robot.trials(learner, n_trials)
     n = robot.params.n_joints
