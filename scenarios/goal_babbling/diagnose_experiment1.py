@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""Issue 27, experiment 1 (thesis §6.5.1): diagnose why plain LPA ends below scratch, in
+process (lpa_transfer.goal_babbling.diagnosis; no ROS graph). Writes into OUTPUT_DIR
+(default runs/diagnosis_exp1): diagnosis.json (everything), mapping.csv (per seed and
+T_guided: correspondences, mapping error, shares within 1/5/10 mm), runs.csv (per seed,
+condition, evaluation: rate, neighbour shares, split rates), finals.csv (final rates over
+grids and thresholds), reference_check.csv (seed 0 in process against the graph's curves).
+
+    python scenarios/goal_babbling/diagnose_experiment1.py [--seeds 0 1 2] [--out DIR]
+"""
+import argparse
+import csv
+import json
+import time
+from pathlib import Path
+
+from lpa_transfer.goal_babbling import diagnosis as dx
+
+ROOT = Path(__file__).resolve().parents[2]
+GUIDED = (60.0, 120.0, 180.0, 240.0)
+VARIANTS_LATE = ("from_guided", "synthesized", "oracle_exact", "oracle_filter_10",
+                 "weighted_0.3")
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--out", default=str(ROOT / "runs" / "diagnosis_exp1"))
+    parser.add_argument("--variant-times", type=float, nargs="+", default=[180.0, 240.0])
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = dx.default_config()
+    start, results = time.perf_counter(), {}
+    for seed in args.seeds:
+        runs = {"scratch": dx.run_scratch(config, seed)}
+        for guided in GUIDED:
+            runs[f"LPA/T{guided:g}"] = dx.run_transfer_condition(config, seed, guided)
+        for guided in args.variant_times:
+            for variant in VARIANTS_LATE:
+                runs[f"LPA-{variant}/T{guided:g}"] = dx.run_transfer_condition(
+                    config, seed, guided, variant)
+        results[seed] = runs
+        print(f"seed {seed} done after {time.perf_counter() - start:.0f} s", flush=True)
+        (out / "diagnosis.json").write_text(json.dumps(results, indent=1, default=float))
+    write_tables(results, out)
+    print(f"wall time {time.perf_counter() - start:.0f} s")
+
+
+def write_tables(results, out):
+    with open(out / "mapping.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["seed", "condition", "n_correspondences", "n_transferred",
+                    "mapping_error_mean_mm", "mapping_error_median_mm", "mapping_error_p90_mm",
+                    "within_1mm", "within_5mm", "within_10mm", "density_share_transferred_start",
+                    "density_majority_start", "density_share_transferred_end",
+                    "density_majority_end"])
+        for seed, runs in results.items():
+            for name, run in runs.items():
+                if name == "scratch":
+                    continue
+                i = run["info"]
+                w.writerow([seed, name, i["n_correspondences"], i["n_transferred"],
+                            i["mapping_error_mean_mm"], i["mapping_error_median_mm"],
+                            i["mapping_error_p90_mm"], i["within_1mm"], i["within_5mm"],
+                            i["within_10mm"], run["density_start"]["density_share_transferred"],
+                            run["density_start"]["density_points_transferred_majority"],
+                            run["density_end"]["density_share_transferred"],
+                            run["density_end"]["density_points_transferred_majority"]])
+    with open(out / "runs.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["seed", "condition", "time_s", "rate", "mean_error_m",
+                    "babble_neighbours_transferred", "eval_neighbours_transferred",
+                    "rate_all_own", "n_all_own", "rate_transferred_accurate",
+                    "n_transferred_accurate", "rate_transferred_inaccurate",
+                    "n_transferred_inaccurate"])
+        for seed, runs in results.items():
+            for time_s, rate, error in runs["scratch"]["curve"]:
+                w.writerow([seed, "scratch", time_s, rate, error] + [""] * 8)
+            for name, run in runs.items():
+                if name == "scratch":
+                    continue
+                for p in run["curve"]:
+                    w.writerow([seed, name, p["time"], p["rate"], p["mean_error"],
+                                p["babble_neighbours_transferred"],
+                                p["eval_neighbours_transferred"], *p["rate_all_own"],
+                                *p["rate_transferred_accurate"],
+                                *p["rate_transferred_inaccurate"]])
+    with open(out / "finals.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        keys = list(results[next(iter(results))]["scratch"]["sweep"])
+        w.writerow(["seed", "condition", *keys])
+        for seed, runs in results.items():
+            for name, run in runs.items():
+                w.writerow([seed, name, *[run["sweep"][k] for k in keys]])
+    reference = ROOT / "scenarios/goal_babbling/reference_results/learning_curves.csv"
+    if 0 in results and reference.exists():
+        graph = {}
+        with open(reference) as f:
+            for row in csv.DictReader(f):
+                if row["seed"] == "0":
+                    graph[(row["condition"], float(row["learning_time_s"]))] = \
+                        float(row["reaching_rate"])
+        with open(out / "reference_check.csv", "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["condition", "time_s", "rate_in_process", "rate_graph"])
+            for time_s, rate, _ in results[0]["scratch"]["curve"]:
+                w.writerow(["scratch", time_s, rate, graph.get(("scratch", time_s), "")])
+            for guided in GUIDED:
+                name = f"LPA/T{guided:g}"
+                for p in results[0][name]["curve"]:
+                    w.writerow([name, p["time"], p["rate"], graph.get((name, p["time"]), "")])
+
+
+if __name__ == "__main__":
+    main()
