@@ -4,7 +4,7 @@
 ARGS ?=
 RUN = bash tools/setup.sh && bash
 PY = bash tools/setup.sh && bash -c 'source tools/env.sh && exec python "$$@"' python
-.PHONY: setup demo test bench ch3 ch3-graph ch4 ch5 ch5-seed0 ch6 ch6-nao-poppy
+.PHONY: setup demo test bench ch3 ch3-graph ch4 ch5 ch5-seed0 ch6 ch6-nao-poppy ch6-nao-poppy-zup multi-host
 
 setup:
 	bash tools/setup.sh
@@ -38,3 +38,9 @@ ch6:         # thesis §6.5.1 (Table 6.1), 10 seeds, into runs/goal_babbling/
 
 ch6-nao-poppy:   # thesis §6.5.2 (Nao -> Poppy), 10 seeds, into runs/nao_poppy/
 	$(RUN) scenarios/goal_babbling/run.sh --config scenarios/goal_babbling/nao_poppy.yaml --out runs/nao_poppy $(ARGS)
+
+ch6-nao-poppy-zup:   # §6.5.2 in the thesis' z-up scene (issue 27), 10 seeds, into runs/nao_poppy_zup/
+	$(RUN) scenarios/goal_babbling/run.sh --config scenarios/goal_babbling/nao_poppy.yaml --override scenarios/goal_babbling/nao_poppy_zup.yaml --out runs/nao_poppy_zup $(ARGS)
+
+multi-host:  # the 2-link graph over three network namespaces (root), into runs/multi_host/
+	$(RUN) scenarios/multi_host/run.sh --config scenarios/two_link_graph/config.yaml --out runs/multi_host $(ARGS)
