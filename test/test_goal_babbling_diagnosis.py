@@ -67,3 +67,22 @@ def test_transferred_rows_variants():
     assert kept_errors.max() <= 0.005
     _, _, w, _, _ = dx.transferred_rows(SMALL, 0, 30.0, "weighted_0.3", guided_longest=30.0)
     assert np.all(w == 0.3)
+
+
+def test_matched_pairs_keeps_only_agreeing_correspondences():
+    # analytic arms reach every command: every pair agrees exactly, none is dropped
+    *_, info = dx.transferred_rows(SMALL, 0, 30.0, "matched_pairs_0.0", guided_longest=30.0)
+    assert info["n_correspondences"] == 300
+
+
+def test_physics_arms_lag_and_pair_residuals_appear():
+    from conftest import ROOT
+    physics = tuple(str(ROOT / f"scenarios/robots/goal_babbling_{side}.toml")
+                    for side in ("source", "target"))
+    config = Experiment1(source_seconds=5.0, total_seconds=10.0)
+    pairs = dx.guided_rows(config, 0, 5.0, physics)
+    residual = np.abs(pairs.source[:, :2] - pairs.target[:, :2]).max(axis=1)
+    assert len(residual) == 50 and residual.max() > 1e-3   # the arms lag differently
+    *_, info = dx.transferred_rows(config, 0, 5.0, "matched_pairs_0.001", guided_longest=5.0,
+                                   physics=physics)
+    assert info["n_correspondences"] == int(np.sum(residual <= 0.001)) < 50

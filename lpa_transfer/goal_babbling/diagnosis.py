@@ -36,8 +36,20 @@ Variants of which rows are transferred (``variant`` of :func:`transferred_rows`)
   true positions — LPA without mapping error;
 * ``oracle_filter_<mm>`` (diagnostic; RobMech 2019 filters by an error threshold): only rows
   whose mapping error is at most <mm> mm;
+* ``matched_pairs_<rad>``: plain rows, LPA fitted only on the correspondences whose two arms
+  reached joint positions within <rad> of each other (Alg. 7 pairs by command; with lag the
+  arms may be apart; §6.5.1: "correspondences are easily defined in their original motor
+  spaces");
 * ``weighted_<w>``: plain rows with k-NN weight w (the §6.6 suggestion "weighting transferred
   data less"; no retirement).
+
+Physics (``physics``: a pair of robot files, e.g. the scenario's goal_babbling_{source,target}
+.toml): the source's babbling, guided exploration and the target's babbling then run on
+pybullet :class:`lpa_transfer.robots.simulator.RobotSimulator` arms in position mode, 100
+physics steps of 1 ms a movement, reset to home before every run, as robot_sim does over the
+graph (the learners then learn the joint positions reached, which may lag the command, and
+guided exploration pairs the joints each arm reached); evaluation stays on the analytic
+kinematics, as the learner node's. ``physics=None``: the analytic kinematics throughout.
 
 All random choices come from the run seed (``experiment.derived_seeds``) or fixed seeds.
 """
@@ -53,18 +65,57 @@ from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.goal_babbling.reaching import evaluation_points, reaching_errors
 from lpa_transfer.goal_babbling.transfer import transfer_experience
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
+from lpa_transfer.robots.environment import stepped_environment
+from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 ACCURACY_MM = (1.0, 5.0, 10.0)
 
 
+PHYSICS_STEPS = 100   # physics steps of 1 ms a movement (config.yaml: steps_per_sample)
+
+
+def environment(config, side, physics=None):
+    """The ``side`` ("source" or "target") arm as babbling executes it: the analytic
+    kinematics, or (``physics`` = (source file, target file)) a fresh pybullet arm at home
+    in position mode behind the same Kinematics (module docstring)."""
+    arm = config.arm(config.source_links if side == "source" else config.target_links)
+    if physics is None:
+        return arm
+    robot = load_robot_params(physics[0 if side == "source" else 1])
+    sim = RobotSimulator(robot_urdf(robot), control_mode="position", physics_step=1e-3,
+                         initial_positions=list(arm.home))
+    sim.reset(list(arm.home))
+    return stepped_environment(arm, sim.step, PHYSICS_STEPS)
+
+
 @lru_cache(maxsize=4)
-def guided_rows(config, seed, seconds):
+def physical_source_experience(config, seed, physics):
+    """ξ_s (N, 4) of the source's goal babbling on its pybullet arm (``physics``), seed
+    ``derived_seeds(seed)[0]``, for ``config.source_seconds``."""
+    source = environment(config, "source", physics)
+    babbler = GoalBabbling(source.task_box, seed=derived_seeds(seed)[0], **dict(config.babbling))
+    rows = np.hstack(babbler.start(source, make_sensorimotor_model(forward=False))
+                     .run_for(config.source_seconds))
+    rows.flags.writeable = False
+    return rows
+
+
+def source_rows(config, seed, physics=None):
+    """The source's experience: analytic (``experiment.source_experience``) or physical."""
+    return source_experience(config, seed) if physics is None else \
+        physical_source_experience(config, seed, physics)
+
+
+@lru_cache(maxsize=4)
+def guided_rows(config, seed, seconds, physics=None):
     """Guided exploration (Alg. 7, §6.4) of ``seconds`` s with the target's babbling seed
     (``derived_seeds(seed)[1]``, as run.sh's collector): a GuidedPairs. Shorter T_guided are
     prefixes of the longest (deterministic), as the graph uses them."""
-    target, source = config.arm(config.target_links), config.arm(config.source_links)
+    target = environment(config, "target", physics)
+    source = environment(config, "source", physics)
     babbler = GoalBabbling(target.task_box, seed=derived_seeds(seed)[1],
                            **dict(config.babbling))
     return guided_exploration(babbler, source, target, [0, 1], [0, 1], seconds)
@@ -91,12 +142,12 @@ def transfer_accuracy(config, commands, points, levels_mm=ACCURACY_MM):
     return errors, {level: float(np.mean(errors <= level / 1000)) for level in levels_mm}
 
 
-def synthesized_source(config, seed, spacing=0.05):
+def synthesized_source(config, seed, spacing=0.05, physics=None):
     """ξ_s synthesized from the source's learned inverse model (§6.4): its model after
     ``source_seconds`` of babbling queried on a grid of ``spacing`` over its reachable task
     box, each command executed on the source: rows (q, x_s)."""
     source = config.arm(config.source_links)
-    rows = source_experience(config, seed)
+    rows = source_rows(config, seed, physics)
     model = make_sensorimotor_model(forward=False)
     model.update(rows[:, :2], rows[:, 2:])
     goals = evaluation_points(source, source.task_box, spacing=spacing)
@@ -114,20 +165,23 @@ def fit_mapping(config, seed, source_pairs, target_pairs, method="lpa"):
 
 
 def transferred_rows(config, seed, guided_seconds, variant="plain", method="lpa",
-                     synth_spacing=0.05, guided_longest=240.0):
+                     synth_spacing=0.05, guided_longest=240.0, physics=None):
     """(commands (N, 2), points (N, 2), weights (N,), info dict) transferred at T_guided for
     ``variant`` (module docstring; guided exploration is run for ``guided_longest`` s and
     cut to T_guided, as the graph does); ``info`` has the correspondence count, the mapping errors'
     mean/median and the shares within 1/5/10 mm of all mapped rows (before any filter)."""
     n_commands = _n_commands(config, guided_seconds)
-    pairs = guided_rows(config, seed, max(guided_seconds, guided_longest))
+    pairs = guided_rows(config, seed, max(guided_seconds, guided_longest), physics)
     _, src, tgt = prefix(pairs, n_commands)
+    if variant.startswith("matched_pairs_"):   # correspondences whose arms' joints agree
+        agree = np.abs(src[:, :2] - tgt[:, :2]).max(axis=1) <= float(variant.rsplit("_", 1)[1])
+        src, tgt = src[agree], tgt[agree]
     mapping = fit_mapping(config, seed, src, tgt, method)
-    experience = source_experience(config, seed)
+    experience = source_rows(config, seed, physics)
     if variant == "from_guided":
         experience = experience[n_commands:]
     elif variant == "synthesized":
-        experience = synthesized_source(config, seed, synth_spacing)
+        experience = synthesized_source(config, seed, synth_spacing, physics)
     commands, points = transfer_experience(mapping, experience,
                                            config.arm(config.target_links).home, [0, 1])
     errors, shares = transfer_accuracy(config, commands, points)
@@ -220,7 +274,7 @@ def _final_sweep(config, model, target):
     return out
 
 
-def run_scratch(config, seed):
+def run_scratch(config, seed, physics=None):
     """Goal babbling from scratch (Alg. 6), as the graph's scratch run: curves (times, rates,
     mean errors) and the final sweep over grids and thresholds."""
     target = config.arm(config.target_links)
@@ -232,12 +286,13 @@ def run_scratch(config, seed):
     def tick(b):
         errors = reaching_errors(model.inverse, target, points)
         curve.append((b.time_, float(np.mean(errors <= config.threshold)), float(errors.mean())))
-    babbler.start(target, model).run_for(config.total_seconds, tick, config.interval)
+    babbler.start(environment(config, "target", physics), model).run_for(
+        config.total_seconds, tick, config.interval)
     return dict(curve=curve, sweep=_final_sweep(config, model, target))
 
 
 def run_transfer_condition(config, seed, guided_seconds, variant="plain", method="lpa",
-                           guided_longest=240.0):
+                           guided_longest=240.0, physics=None):
     """One transfer run as the graph builds it (module docstring), instrumented: the learning
     curve with, at every evaluation, the neighbour split (:class:`NeighbourLog`), the mean share
     of transferred neighbours in the goal-babbling steps since the previous evaluation, the
@@ -246,10 +301,15 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
     target = config.arm(config.target_links)
     points = _test_points(config)
     n_commands = _n_commands(config, guided_seconds)
-    own, _, _ = prefix(guided_rows(config, seed, max(guided_seconds, guided_longest)),
-                       n_commands)
+    pairs = guided_rows(config, seed, max(guided_seconds, guided_longest), physics)
+    own, src, tgt = prefix(pairs, n_commands)
     commands, task_points, weights, errors, info = transferred_rows(
-        config, seed, guided_seconds, variant, method, guided_longest=guided_longest)
+        config, seed, guided_seconds, variant, method, guided_longest=guided_longest,
+        physics=physics)
+    residual = np.abs(src[:, :2] - tgt[:, :2]).max(axis=1)
+    info.update(pair_residual_median_rad=float(np.median(residual)),
+                pair_residual_p95_rad=float(np.quantile(residual, 0.95)),
+                pair_residual_max_rad=float(residual.max()))
     model = make_sensorimotor_model(forward=False)
     model.update(own[:, :2], own[:, 2:])
     if len(commands):
@@ -270,7 +330,7 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
                           babble_neighbours_transferred=babble_share, **split))
     evaluate(guided_seconds)
     babbler = GoalBabbling(target.task_box, seed=derived_seeds(seed)[3], **dict(config.babbling))
-    babbler.start(target, model)
+    babbler.start(environment(config, "target", physics), model)
     babbler.run_for(config.total_seconds - guided_seconds,
                     lambda b: evaluate(guided_seconds + b.time_), config.interval)
     if not np.isclose(curve[-1]["time"], config.total_seconds):
@@ -290,6 +350,6 @@ def default_config():
 
 
 __all__ = ["ACCURACY_MM", "GRIDS", "NeighbourLog", "THRESHOLDS_MM", "default_config", "density",
-           "evaluation_times", "fit_mapping", "guided_rows", "prefix", "run_scratch",
+           "environment", "evaluation_times", "fit_mapping", "guided_rows", "prefix", "run_scratch",
            "run_transfer_condition", "synthesized_source", "transfer_accuracy",
            "transferred_rows"]
