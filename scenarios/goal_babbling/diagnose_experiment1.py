@@ -87,54 +87,51 @@ class _Rows(list):
 def tables(results):
     """{table name: rows (header first)} of one mode's results."""
     made = {}
-    if True:
-        w = made["mapping"] = _Rows()
-        w.writerow(["seed", "condition", "n_correspondences", "n_transferred",
-                    "pair_residual_median_rad", "pair_residual_p95_rad", "pair_residual_max_rad",
-                    "mapping_error_mean_mm", "mapping_error_median_mm", "mapping_error_p90_mm",
-                    "within_1mm", "within_5mm", "within_10mm", "density_share_transferred_start",
-                    "density_majority_start", "density_share_transferred_end",
-                    "density_majority_end"])
-        for seed, runs in results.items():
-            for name, run in runs.items():
-                if name == "scratch":
-                    continue
-                i = run["info"]
-                w.writerow([seed, name, i["n_correspondences"], i["n_transferred"],
-                            i["pair_residual_median_rad"], i["pair_residual_p95_rad"],
-                            i["pair_residual_max_rad"],
-                            i["mapping_error_mean_mm"], i["mapping_error_median_mm"],
-                            i["mapping_error_p90_mm"], i["within_1mm"], i["within_5mm"],
-                            i["within_10mm"], run["density_start"]["density_share_transferred"],
-                            run["density_start"]["density_points_transferred_majority"],
-                            run["density_end"]["density_share_transferred"],
-                            run["density_end"]["density_points_transferred_majority"]])
-    if True:
-        w = made["runs"] = _Rows()
-        w.writerow(["seed", "condition", "time_s", "rate", "mean_error_m",
-                    "babble_neighbours_transferred", "eval_neighbours_transferred",
-                    "rate_all_own", "n_all_own", "rate_transferred_accurate",
-                    "n_transferred_accurate", "rate_transferred_inaccurate",
-                    "n_transferred_inaccurate"])
-        for seed, runs in results.items():
-            for time_s, rate, error in runs.get("scratch", {}).get("curve", []):
-                w.writerow([seed, "scratch", time_s, rate, error] + [""] * 8)
-            for name, run in runs.items():
-                if name == "scratch":
-                    continue
-                for p in run["curve"]:
-                    w.writerow([seed, name, p["time"], p["rate"], p["mean_error"],
-                                p["babble_neighbours_transferred"],
-                                p["eval_neighbours_transferred"], *p["rate_all_own"],
-                                *p["rate_transferred_accurate"],
-                                *p["rate_transferred_inaccurate"]])
-    if True:
-        w = made["finals"] = _Rows()
-        keys = list(next(iter(results[next(iter(results))].values()))["sweep"])
-        w.writerow(["seed", "condition", *keys])
-        for seed, runs in results.items():
-            for name, run in runs.items():
-                w.writerow([seed, name, *[run["sweep"][k] for k in keys]])
+    w = made["mapping"] = _Rows()
+    w.writerow(["seed", "condition", "n_correspondences", "n_transferred",
+                "pair_residual_median_rad", "pair_residual_p95_rad", "pair_residual_max_rad",
+                "mapping_error_mean_mm", "mapping_error_median_mm", "mapping_error_p90_mm",
+                "within_1mm", "within_5mm", "within_10mm", "density_share_transferred_start",
+                "density_majority_start", "density_share_transferred_end",
+                "density_majority_end"])
+    for seed, runs in results.items():
+        for name, run in runs.items():
+            if name == "scratch":
+                continue
+            i = run["info"]
+            w.writerow([seed, name, i["n_correspondences"], i["n_transferred"],
+                        i["pair_residual_median_rad"], i["pair_residual_p95_rad"],
+                        i["pair_residual_max_rad"],
+                        i["mapping_error_mean_mm"], i["mapping_error_median_mm"],
+                        i["mapping_error_p90_mm"], i["within_1mm"], i["within_5mm"],
+                        i["within_10mm"], run["density_start"]["density_share_transferred"],
+                        run["density_start"]["density_points_transferred_majority"],
+                        run["density_end"]["density_share_transferred"],
+                        run["density_end"]["density_points_transferred_majority"]])
+    w = made["runs"] = _Rows()
+    w.writerow(["seed", "condition", "time_s", "rate", "mean_error_m",
+                "babble_neighbours_transferred", "eval_neighbours_transferred",
+                "rate_all_own", "n_all_own", "rate_transferred_accurate",
+                "n_transferred_accurate", "rate_transferred_inaccurate",
+                "n_transferred_inaccurate"])
+    for seed, runs in results.items():
+        for time_s, rate, error in runs.get("scratch", {}).get("curve", []):
+            w.writerow([seed, "scratch", time_s, rate, error] + [""] * 8)
+        for name, run in runs.items():
+            if name == "scratch":
+                continue
+            for p in run["curve"]:
+                w.writerow([seed, name, p["time"], p["rate"], p["mean_error"],
+                            p["babble_neighbours_transferred"],
+                            p["eval_neighbours_transferred"], *p["rate_all_own"],
+                            *p["rate_transferred_accurate"],
+                            *p["rate_transferred_inaccurate"]])
+    w = made["finals"] = _Rows()
+    keys = list(next(iter(results[next(iter(results))].values()))["sweep"])
+    w.writerow(["seed", "condition", *keys])
+    for seed, runs in results.items():
+        for name, run in runs.items():
+            w.writerow([seed, name, *[run["sweep"][k] for k in keys]])
     reference = ROOT / "scenarios/goal_babbling/reference_results/learning_curves.csv"
     if 0 in results and "scratch" in results[0] and reference.exists():
         graph = {}
@@ -143,15 +140,14 @@ def tables(results):
                 if row["seed"] == "0":
                     graph[(row["condition"], float(row["learning_time_s"]))] = \
                         float(row["reaching_rate"])
-        if True:
-            w = made["reference_check"] = _Rows()
-            w.writerow(["condition", "time_s", "rate_in_process", "rate_graph"])
-            for time_s, rate, _ in results[0]["scratch"]["curve"]:
-                w.writerow(["scratch", time_s, rate, graph.get(("scratch", time_s), "")])
-            for guided in GUIDED:
-                name = f"LPA/T{guided:g}"
-                for p in results[0][name]["curve"]:
-                    w.writerow([name, p["time"], p["rate"], graph.get((name, p["time"]), "")])
+        w = made["reference_check"] = _Rows()
+        w.writerow(["condition", "time_s", "rate_in_process", "rate_graph"])
+        for time_s, rate, _ in results[0]["scratch"]["curve"]:
+            w.writerow(["scratch", time_s, rate, graph.get(("scratch", time_s), "")])
+        for guided in GUIDED:
+            name = f"LPA/T{guided:g}"
+            for p in results[0][name]["curve"]:
+                w.writerow([name, p["time"], p["rate"], graph.get((name, p["time"]), "")])
     return made
 
 
