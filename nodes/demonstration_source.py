@@ -19,9 +19,10 @@ import time
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+from lpa_transfer.lfd.demonstrations import LASA_DEMOS_PER_SHAPE, lasa_shape_names
 from lpa_transfer.lfd.experiment import demonstrations, load_setup
 from lpa_transfer_interfaces.msg import Demonstration
-from lpa_transfer_nodes._ros_util import serve, to_matrix
+from lpa_transfer_nodes._ros_util import declare, describe_use_sim_time, serve, to_matrix
 
 
 def demonstration_qos(count):
@@ -42,18 +43,30 @@ def demonstration_msg(body, demo, index, n_demos, stamp):
 class DemonstrationSource(Node):
     def __init__(self):
         super().__init__("demonstration_source")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
-        frames = os.path.expanduser(declare("frames", ""))
+        frames = os.path.expanduser(declare(
+            self, "frames", "", "the scenario's frames file (e.g. scenarios/lfd/frames.yaml): "
+            "its demonstrator is the body that demonstrates; required"))
         if not frames:
             raise ValueError("parameter 'frames' (the scenario's frames file) is required")
         demonstrator = load_setup(frames, os.getcwd()).demonstrator
-        shapes = list(declare("shapes", ["LShape"]))
-        n_demos = int(declare("n_demos", 5))
-        box = (list(declare("task_box_low", [0.0])), list(declare("task_box_high", [0.0])))
+        shapes = list(declare(self, "shapes", ["LShape"], "LASA shape names",
+                         additional_constraints="LASA names: " + ", ".join(lasa_shape_names())))
+        n_demos = declare(self, "n_demos", 5, "demonstrations per shape",
+                          range=(1, LASA_DEMOS_PER_SHAPE))
+        box = tuple(list(declare(self, f"task_box_{end}", [0.0], f"the {end} corner of the "
+                                 f"box the shapes are placed in (m, the demonstrator's world "
+                                 f"frame); the default [0.0] is a placeholder: set both"))
+                    for end in ("low", "high"))
+        seed = declare(self, "layout_seed", 0, "seed of the shapes' placement in the box",
+                       range=(0, None))
+        n_samples = declare(self, "n_samples", 100, "samples per demonstration",
+                            range=(3, None))
+        n_joints = declare(self, "n_joints", 4, "the demonstrator's joints that move (its "
+                           "first n)", range=(1, None))
+        describe_use_sim_time(self)
         started = time.perf_counter()
-        demos = demonstrations(demonstrator, shapes, box, seed=int(declare("layout_seed", 0)),
-                               n_demos=n_demos, n_samples=int(declare("n_samples", 100)),
-                               n_joints=int(declare("n_joints", 4)))
+        demos = demonstrations(demonstrator, shapes, box, seed=seed, n_demos=n_demos,
+                               n_samples=n_samples, n_joints=n_joints)
         publisher = self.create_publisher(Demonstration, "demonstrations",
                                           demonstration_qos(len(demos)))
         stamp = self.get_clock().now().to_msg()

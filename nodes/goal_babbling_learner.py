@@ -42,7 +42,8 @@ from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
 from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
 from lpa_transfer_nodes._ros_util import (RobotClients, ServiceTimeout, answering,
-                                          array_parameter, call_service, from_matrix,
+                                          call_service, declare, declare_array,
+                                          describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
 
@@ -59,38 +60,80 @@ class Stopped(ValueError):
 class GoalBabblingLearner(Node):
     def __init__(self, stop):
         super().__init__("goal_babbling_learner")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
-        doubles = lambda name: array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)  # noqa: E731,E501
+        def doubles(name, description, constraints=""):
+            return declare_array(self, name, Parameter.Type.DOUBLE_ARRAY, description,
+                                 additional_constraints=constraints)
+
         self.stop = stop
-        path = declare("robot", "")
+        path = declare(self, "robot", "", "the robot parameter file (joint limits and analytic "
+                       "kinematics); required")
         if not path:
             raise ValueError("the parameter 'robot' (a robot .toml file) is required")
         self.robot = load_robot_params(os.path.expanduser(path))
-        self.kinematics = robot_kinematics(self.robot, doubles("home") or None)
-        active = array_parameter(self, "active_joints", Parameter.Type.INTEGER_ARRAY)
+        home = doubles("home", "q_home (rad), where babbling starts and returns to; unset: "
+                       "zero clipped into the joint limits", "one value per joint")
+        self.kinematics = robot_kinematics(self.robot, home or None)
+        active = declare_array(self, "active_joints", Parameter.Type.INTEGER_ARRAY,
+                               "babble with these joints only, the others held at home; "
+                               "unset: all", additional_constraints="distinct joint indices")
         if active:   # the other joints held at home (their ranges shrink to it)
             self.kinematics = hold_at_home(self.kinematics, active)
         self.n_task = task_dims(self.kinematics)
-        x_low, x_high = doubles("x_low"), doubles("x_high")
+        x_low, x_high = (doubles(f"x_{end}", f"X_bounds' {end} corner: the task box goals are "
+                                 f"drawn from (m); required", "one value per task coordinate")
+                         for end in ("low", "high"))
         if not x_low or not x_high:
             raise ValueError("the parameters 'x_low' and 'x_high' (X_bounds, the task box goals "
                              "are drawn from) are required")
         self.x_bounds = check_x_bounds((x_low, x_high), self.n_task)
         self.babbling_params = dict(
-            n_subtargets=declare("n_subtargets", 10), sigma=float(declare("sigma", 0.1)),
-            drift=float(declare("drift", 0.01)), p_home=float(declare("p_home", 0.1)),
-            steps_per_second=float(declare("steps_per_second", 10.0)), seed=declare("seed", 0))
-        self.steps_per_sample = declare("steps_per_sample", 100)
-        physics_step = float(declare("physics_step", 0.001))
-        self.n_neighbors = declare("n_neighbors", 3)
-        self.guard = self.guard_spec(declare("guard", False), declare("guard_params", "{}"))
-        eval_bounds = (doubles("eval_low") or self.x_bounds[0],
-                       doubles("eval_high") or self.x_bounds[1])
-        eval_spacing = float(declare("eval_spacing", 0.05))
-        eval_joint_samples = declare("eval_joint_samples", 20000)
-        self.threshold = float(declare("reaching_threshold", 0.01))
-        self.call_timeout = float(declare("call_timeout", 30.0))
-        self.wait_timeout = float(declare("wait_timeout", 30.0))
+            n_subtargets=declare(self, "n_subtargets", 10, "GoalBabbling's T, sub-targets per "
+                                 "goal", range=(1, None)),
+            sigma=declare(self, "sigma", 0.1, "GoalBabbling's exploration noise",
+                          range=(0.0, None), finite=True),
+            drift=declare(self, "drift", 0.01, "drift of the exploration noise",
+                          range=(0.0, None), finite=True),
+            p_home=declare(self, "p_home", 0.1, "probability of returning home",
+                           range=(0.0, 1.0)),
+            steps_per_second=declare(self, "steps_per_second", 10.0, "babbling steps a "
+                                     "simulated second (the learner's clock)", positive=True,
+                                     finite=True),
+            seed=declare(self, "seed", 0, "GoalBabbling's seed (unless an initialise with "
+                         "reset gives one)", range=(0, None)))
+        self.steps_per_sample = declare(self, "steps_per_sample", 100, "physics steps per "
+                                        "babbling step", range=(1, None))
+        physics_step = declare(self, "physics_step", 0.001, "the simulator's physics step (s)",
+                               positive=True, finite=True)
+        self.n_neighbors = declare(self, "n_neighbors", 3, "K of the K-nearest-neighbour "
+                                   "inverse model", range=(1, None))
+        self.guard = self.guard_spec(
+            declare(self, "guard", False, "take transferred samples into a GuardedModel "
+                    "(lower weight, retired once covered or contradicted by own data) instead "
+                    "of learning them like own data"),
+            declare(self, "guard_params", "{}", "JSON object of GuardedModel's "
+                    "hyperparameters; lipschitz defaults to the robot's chain_lipschitz; "
+                    "ignored when guard is false",
+                    additional_constraints="keys from " + ", ".join(GUARD_KEYS)))
+        eval_bounds = tuple(doubles(f"eval_{end}", f"the {end} corner of the test points' box "
+                                    f"(m); unset: X_bounds' {end} corner") or bound
+                            for end, bound in zip(("low", "high"), self.x_bounds))
+        eval_spacing = declare(self, "eval_spacing", 0.05, "the test points' grid spacing (m)",
+                               positive=True, finite=True)
+        eval_joint_samples = declare(self, "eval_joint_samples", 20000, "the joint samples "
+                                     "that find the reachable grid points (once, at start-up)",
+                                     range=(1, None))
+        self.threshold = declare(self, "reaching_threshold", 0.01, "a test point counts as "
+                                 "reached within this distance (m)", range=(0.0, None),
+                                 finite=True)
+        self.call_timeout = declare(self, "call_timeout", 30.0, "s for each robot call",
+                                    range=(0.0, None), finite=True)
+        self.wait_timeout = declare(self, "wait_timeout", 30.0, "s to wait for the robot's "
+                                    "services", range=(0.0, None), finite=True)
+        step_service = declare(self, "step_service", "robot_sim/step", "the robot's StepRobot "
+                               "service, resolved in the node's namespace")
+        reset_service = declare(self, "reset_service", "robot_sim/reset", "the robot's "
+                                "ResetRobot service, resolved in the node's namespace")
+        describe_use_sim_time(self)
         self.check_hyperparameters(physics_step)
         self.points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
                                         spacing=eval_spacing,
@@ -99,8 +142,7 @@ class GoalBabblingLearner(Node):
             raise ValueError(f"no test points: no point of the grid of {eval_spacing:g} m over "
                              f"the box {np.round(eval_bounds, 6).tolist()} is reachable (check "
                              f"eval_low/eval_high, x_low/x_high and eval_spacing)")
-        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
-                                          declare("reset_service", "robot_sim/reset"))
+        self.robot_clients = RobotClients(self, step_service, reset_service)
         self.environment = stepped_environment(
             self.kinematics, robot_stepper(self.call, self.robot_clients.step, self.robot.name),
             self.steps_per_sample, on_sample=self.on_sample)
@@ -137,19 +179,9 @@ class GoalBabblingLearner(Node):
         return params
 
     def check_hyperparameters(self, physics_step):
-        """Fail at start-up, not at the first call, on bad hyperparameters: build a model and
-        start a GoalBabbling on the analytic kinematics (no robot involved)."""
-        if isinstance(self.steps_per_sample, bool) or not isinstance(self.steps_per_sample, int) \
-                or self.steps_per_sample < 1:
-            raise ValueError(f"steps_per_sample must be an integer >= 1, got "
-                             f"{self.steps_per_sample!r}")
-        if not (physics_step > 0 and math.isfinite(physics_step)):
-            raise ValueError(f"physics_step must be a finite number > 0, got {physics_step}")
-        for name, value in (("reaching_threshold", self.threshold),
-                            ("call_timeout", self.call_timeout),
-                            ("wait_timeout", self.wait_timeout)):
-            if not (value >= 0 and math.isfinite(value)):
-                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+        """Fail at start-up, not at the first call, on bad hyperparameters (the parameters'
+        ranges are checked as they are declared): build a model and start a GoalBabbling on
+        the analytic kinematics (no robot involved)."""
         GoalBabbling(self.x_bounds, home=self.kinematics.home, **self.babbling_params).start(
             self.kinematics, self.fresh_model())
         step_seconds = self.steps_per_sample * physics_step

@@ -21,8 +21,8 @@ import json
 import numpy as np
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, from_matrix, serve,
-                                          to_matrix)
+from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, declare,
+                                          describe_use_sim_time, from_matrix, serve, to_matrix)
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.exploration.correspondences import load_correspondences
 from lpa_transfer.transfer.model_store import ModelStore, training_rmse
@@ -56,7 +56,10 @@ class MappingService(Node):
 
     def __init__(self):
         super().__init__("lpa_mapping")
-        model_dir = self.declare_parameter("model_dir", "~/.lpa_transfer/models").value
+        model_dir = declare(self, "model_dir", "~/.lpa_transfer/models",
+                            "directory where models are persisted, one .npz per model id; all "
+                            "are reloaded on start")
+        describe_use_sim_time(self)
         self.store = ModelStore(model_dir)
         self.received = {}
         self.create_subscription(CorrespondenceSample, "correspondences", self.on_sample,

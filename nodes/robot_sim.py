@@ -30,10 +30,10 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.robots.simulator import CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (FastExecutor, answering, array_parameter, serve,
-                                          sim_stamp)
+from lpa_transfer_nodes._ros_util import (FastExecutor, answering, declare, declare_array,
+                                          describe_use_sim_time, serve, sim_stamp)
 
 WORLD_FRAME = "world"
 
@@ -41,16 +41,33 @@ WORLD_FRAME = "world"
 class RobotSim(Node):
     def __init__(self):
         super().__init__("robot_sim")
-        robot = self.declare_parameter("robot", "").value
-        urdf = self.declare_parameter("urdf", "").value
-        control_mode = self.declare_parameter("control_mode", "position").value
-        physics_step = float(self.declare_parameter("physics_step", 1e-3).value)
-        control_rate = float(self.declare_parameter("control_rate", 100.0).value)
-        initial = array_parameter(self, "initial_positions",
-                                  Parameter.Type.DOUBLE_ARRAY) or None
-        seed = int(self.declare_parameter("seed", 0).value)
-        position_gain = float(self.declare_parameter("position_gain", 0.05).value)
-        self.lockstep = bool(self.declare_parameter("lockstep", True).value)
+        robot = declare(self, "robot", "", "robot parameter file (scenarios/robots/*.toml) "
+                        "or a URDF file (*.urdf: its serial chain from the root link); set "
+                        "exactly one of robot and urdf")
+        urdf = declare(self, "urdf", "", "a URDF file simulated as it is, instead of robot")
+        control_mode = declare(self, "control_mode", "position",
+                               "position: commands are joint targets (rad); torque: commands "
+                               "are joint torques (N m)", choices=CONTROL_MODES)
+        physics_step = declare(self, "physics_step", 1e-3, "the pybullet time step (s)",
+                               positive=True, finite=True)
+        control_rate = declare(self, "control_rate", 100.0,
+                               "free-running mode only: the timer's rate (Hz)", positive=True,
+                               finite=True)
+        initial = declare_array(self, "initial_positions", Parameter.Type.DOUBLE_ARRAY,
+                                "the initial pose (rad), also the pose of a ~/reset with empty "
+                                "positions; unset: zero clipped into the joint limits",
+                                additional_constraints="one value per joint") or None
+        seed = declare(self, "seed", 0, "seed passed to the simulator (which is deterministic)")
+        position_gain = declare(self, "position_gain", 0.05,
+                                "the position motors' gain (pybullet's positionGains: the "
+                                "share of the position error removed per physics step; "
+                                "pybullet's own 0.1 can chatter)",
+                                range=(0.0, 1.0), positive=True)
+        self.lockstep = declare(self, "lockstep", True,
+                                "true: lock-step, the ~/step and ~/reset services advance the "
+                                "simulation; false: free-running, a timer advances it in wall "
+                                "time with the latest joint_commands")
+        describe_use_sim_time(self)
 
         if bool(robot) == bool(urdf):
             raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "

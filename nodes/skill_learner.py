@@ -27,7 +27,8 @@ from lpa_transfer.robots.kinematics import arm_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
-from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, from_matrix,
+from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, declare,
+                                          describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
 
@@ -35,23 +36,36 @@ from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service,
 class SkillLearner(Node):
     def __init__(self, stop):
         super().__init__("skill_learner")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
         self.stop = stop
-        self.robot = load_robot_params(os.path.expanduser(declare("robot", "")))
-        self.n_joints = int(declare("n_joints", 4))
+        self.robot = load_robot_params(os.path.expanduser(declare(
+            self, "robot", "", "the robot parameter file; required")))
+        self.n_joints = declare(self, "n_joints", 4, "the DMP drives the robot's first n "
+                                "joints; the others are held at the robot's home (zero "
+                                "clipped into the limits)", range=(1, None))
         self.kinematics = arm_kinematics(self.robot, self.n_joints, name=self.robot.name)
         self.home = home_pose(self.robot.joint_limits)
-        self.dmp = JointDMP(n_weights_per_dim=int(declare("dmp_weights_per_joint", 30)),
-                            alpha_z=float(declare("dmp_alpha_z", 25.0)))
-        self.physics_step = float(declare("physics_step", 0.001))
-        self.settle_steps = int(declare("settle_steps", 0))
-        if not self.physics_step > 0 or self.settle_steps < 0:
-            raise ValueError(f"physics_step must be > 0 and settle_steps >= 0, got "
-                             f"{self.physics_step} and {self.settle_steps}")
-        self.call_timeout = float(declare("call_timeout", 30.0))
-        self.wait_timeout = float(declare("wait_timeout", 30.0))
-        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
-                                          declare("reset_service", "robot_sim/reset"))
+        self.dmp = JointDMP(
+            n_weights_per_dim=declare(self, "dmp_weights_per_joint", 30, "the DMP's N, basis "
+                                      "functions per joint", range=(2, None)),
+            alpha_z=declare(self, "dmp_alpha_z", 25.0, "the DMP's alpha_z (beta_z = "
+                            "alpha_z / 4)", positive=True, finite=True))
+        self.physics_step = declare(self, "physics_step", 0.001, "the simulator's physics step "
+                                    "(s): sample k is commanded for round((t_k - t_k-1) / "
+                                    "physics_step) + settle_steps physics steps",
+                                    positive=True, finite=True)
+        self.settle_steps = declare(self, "settle_steps", 0, "extra physics steps after each "
+                                    "command before the end effector is read",
+                                    range=(0, None))
+        self.call_timeout = declare(self, "call_timeout", 30.0, "s for each robot call",
+                                    range=(0.0, None))
+        self.wait_timeout = declare(self, "wait_timeout", 30.0, "s to wait for the robot's "
+                                    "services", range=(0.0, None))
+        self.robot_clients = RobotClients(
+            self, declare(self, "step_service", "robot_sim/step", "the robot's StepRobot "
+                          "service, resolved in the node's namespace"),
+            declare(self, "reset_service", "robot_sim/reset", "the robot's ResetRobot "
+                    "service, resolved in the node's namespace"))
+        describe_use_sim_time(self)
         self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
         self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
                                              self.robot.name)
