@@ -52,7 +52,8 @@ from lpa_transfer.goal_babbling.transfer import padded_rows  # noqa: E402
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, GoalBabble,  # noqa: E402
                                          InitialiseSensorimotor, TransferPoints)
-from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
+from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
+                                          describe_use_sim_time, from_matrix, run_job,
                                           to_matrix, wait_for_services)
 
 THESIS = ("thesis §6.5.1 (Fig. 6-6/6-7, read from the text): transfer boosts learning at "
@@ -64,36 +65,71 @@ class Experiment(Node):
     def __init__(self, stop):
         super().__init__("experiment")
         self.stop = stop
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
-        self.robot_files = {side: declare(f"{side}_robot", "") for side in ("source", "target")}
+        seconds = dict(range=(0.0, None), finite=True)
+        self.robot_files = {side: declare(self, f"{side}_robot", "", f"the {side} robot's "
+                                          f"parameter file; required")
+                            for side in ("source", "target")}
         self.robots = {side: load_robot_params(path) for side, path in self.robot_files.items()}
-        self.target_home = list(declare("target_home", [0.0]))
-        self.joints = {side: list(declare(f"{side}_joints", [0, 1]))
+        self.target_home = list(declare(self, "target_home", [0.0], "the target's q_home "
+                                        "(rad): transferred rows are padded with it for the "
+                                        "joints the source lacks"))
+        self.joints = {side: list(declare(self, f"{side}_joints", [0, 1], "the shared joints "
+                                          "(source_joints[i] is target_joints[i]): the "
+                                          f"{side}'s joint columns in the transferred rows"))
                        for side in ("source", "target")}
-        self.seeds = list(declare("seeds", [0]))
-        self.source_seconds = float(declare("source_seconds", 1000.0))
-        self.total_seconds = float(declare("total_seconds", 1000.0))
-        self.guided_seconds = [float(t) for t in declare("guided_seconds", [60.0])]
-        self.interval = float(declare("interval", 60.0))
-        self.steps_per_second = float(declare("steps_per_second", 10.0))
-        self.methods = list(declare("methods", ["pa", "lpa"]))
-        self.guarded = bool(declare("guarded", True))
-        self.reaching_threshold = float(declare("reaching_threshold", 0.01))
-        self.transfer_from_guided = bool(declare("transfer_from_guided", False))
-        self.thesis = declare("thesis", THESIS)
-        self.fit = dict(latent_dim=declare("latent_dim", 0), n_min=declare("n_min", 7),
-                        c_min=declare("c_min", 1e-7))
-        self.x_bounds = (list(declare("x_low", [0.0])), list(declare("x_high", [0.0])))
-        self.eval_spacing = float(declare("eval_spacing", 0.05))
-        self.eval_joint_samples = declare("eval_joint_samples", 20000)
-        self.output_dir = Path(declare("output_dir", "."))
+        self.seeds = list(declare(self, "seeds", [0], "experiment seeds (each derives its "
+                                  "babbling seeds); one guided-exploration .npz argument each, "
+                                  "in this order"))
+        self.source_seconds = declare(self, "source_seconds", 1000.0, "simulated s the source "
+                                      "goal-babbles from scratch: its experience", **seconds)
+        self.total_seconds = declare(self, "total_seconds", 1000.0, "the target's learning "
+                                     "time in every condition (simulated s)", **seconds)
+        self.guided_seconds = [float(t) for t in declare(
+            self, "guided_seconds", [60.0], "T_guided values (simulated s of guided "
+            "exploration before transfer)", additional_constraints="each in (0, total_seconds]")]
+        self.interval = declare(self, "interval", 60.0, "simulated s between evaluations of "
+                                "the learners", **seconds)
+        self.steps_per_second = declare(self, "steps_per_second", 10.0, "movement steps a "
+                                        "simulated second: T_guided uses the first T_guided * "
+                                        "steps_per_second commands of guided exploration",
+                                        positive=True, finite=True)
+        self.methods = list(declare(self, "methods", ["pa", "lpa"], "the transfer methods",
+                                    additional_constraints="from pa, lpa"))
+        self.guarded = declare(self, "guarded", True, "also run every transfer condition on "
+                               "/target/guarded_learner (the guard against negative transfer)")
+        self.reaching_threshold = declare(self, "reaching_threshold", 0.01, "the learners' "
+                                          "reaching threshold (m), for the report",
+                                          range=(0.0, None), finite=True)
+        self.transfer_from_guided = declare(self, "transfer_from_guided", False, "transfer "
+                                            "only the source experience babbled after "
+                                            "T_guided (as thesis §6.5.2 does)")
+        self.thesis = declare(self, "thesis", THESIS, "the thesis' result, quoted in the report")
+        self.fit = dict(
+            latent_dim=declare(self, "latent_dim", 0, "the mapping's latent dimension (0: "
+                               "all)", range=(0, None)),
+            n_min=declare(self, "n_min", 7, "LPA's N_min (0: the service's default)",
+                          range=(0, None)),
+            c_min=declare(self, "c_min", 1e-7, "LPA's c_min", range=(0.0, None)))
+        self.x_bounds = tuple(list(declare(self, f"x_{end}", [0.0], f"X_bounds' {end} corner "
+                                           "(m): the target's task box, for the report's "
+                                           "figures and test points"))
+                              for end in ("low", "high"))
+        self.eval_spacing = declare(self, "eval_spacing", 0.05, "the test points' grid "
+                                    "spacing (m), for the report", positive=True, finite=True)
+        self.eval_joint_samples = declare(self, "eval_joint_samples", 20000, "the joint "
+                                          "samples that find the reachable grid points, for "
+                                          "the report", range=(1, None))
+        self.output_dir = Path(declare(self, "output_dir", ".", "where results.json, "
+                                       "learning_curves.csv, the figures and report.txt go"))
+        call_timeout = declare(self, "call_timeout", 1800.0, "s a single service call may "
+                               "take (a babble call runs for minutes)", range=(0.0, None))
+        describe_use_sim_time(self)
         if not 0 < max(self.guided_seconds) <= self.total_seconds:
             raise ValueError(f"guided_seconds must lie in (0, total_seconds], got "
                              f"{self.guided_seconds}")
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
-        self.calls = ServiceCalls(self, self.spinner, float(declare("call_timeout", 1800.0)),
-                                     stop)
+        self.calls = ServiceCalls(self, self.spinner, call_timeout, stop)
         self.call = self.calls.call
         self.seeds_done = []
 
@@ -133,7 +169,7 @@ class Experiment(Node):
         services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
         services += ["/target/guarded_learner/babble"] if self.guarded else []
         wait_for_services([self.calls.client(FitModel if s.endswith("fit") else GoalBabble, s)
-                           for s in services], 60, self.stop)
+                           for s in services], 60, self.stop, self.spinner)
         curves = {}
         for seed, pair_file in zip(self.seeds, pair_files):
             source_seed, target_seed, lpa_seed, after_transfer_seed = derived_seeds(seed)

@@ -51,7 +51,8 @@ from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
-                                          from_matrix, run_job, to_matrix)
+                                          declare, describe_use_sim_time, from_matrix,
+                                          run_job, to_matrix)
 from lpa_transfer_nodes.demonstration_source import (demonstration_msg,  # noqa: E402
                                                      demonstration_qos)
 
@@ -61,18 +62,36 @@ METHODS = ("transferred", "ik_method")
 class Experiment(Node):
     def __init__(self, stop):
         super().__init__("experiment")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
         self.stop = stop
-        self.setup = load_setup(declare("frames", ""), Path.cwd())
-        self.n_expected = len(declare("shapes", ["LShape"])) * int(declare("n_demos", 5))
-        self.pairs = int(declare("graph_pairs", 20000))
-        self.seed = int(declare("graph_seed", 0))
-        self.fit = dict(method="lpa", n_min=int(declare("graph_n_min", 12)),
-                        c_min=float(declare("c_min", 1e-7)), latent_dim=0, random_state=0)
-        self.teacher = declare("teacher", "pr2_right_arm")
-        self.learner = declare("learner", "meka_right_arm")
-        self.output_dir = Path(declare("output_dir", "."))
-        self.wait_timeout = float(declare("wait_timeout", 120.0))
+        self.setup = load_setup(declare(self, "frames", "", "the scenario's frames file "
+                                        "(demonstrator, robots, joint maps, task frames); "
+                                        "required"), Path.cwd())
+        self.n_expected = len(declare(self, "shapes", ["LShape"], "the shapes "
+                                      "demonstration_source demonstrates (as its parameter)")) \
+            * declare(self, "n_demos", 5, "demonstrations per shape (as demonstration_source's "
+                      "parameter)", range=(1, None))
+        self.pairs = declare(self, "graph_pairs", 20000, "correspondences collected per "
+                             "mapping (babbling the robot, the demonstrator's IK)",
+                             range=(1, None))
+        self.seed = declare(self, "graph_seed", 0, "seed of the correspondences' babbling",
+                            range=(0, None))
+        self.fit = dict(method="lpa",
+                        n_min=declare(self, "graph_n_min", 12, "LPA's N_min of every mapping "
+                                      "(0: the service's default)", range=(0, None)),
+                        c_min=declare(self, "c_min", 1e-7, "LPA's c_min of every mapping",
+                                      range=(0.0, None)),
+                        latent_dim=0, random_state=0)
+        self.teacher = declare(self, "teacher", "pr2_right_arm", "Table 4.3: the robot that "
+                               "teaches the learner (a robot of the frames file)")
+        self.learner = declare(self, "learner", "meka_right_arm", "Table 4.3: the robot "
+                               "taught via the teacher (a robot of the frames file)")
+        self.output_dir = Path(declare(self, "output_dir", ".", "where results.json, "
+                                       "report.txt and the figure go"))
+        self.wait_timeout = declare(self, "wait_timeout", 120.0, "s to wait for every "
+                                    "demonstration to arrive", range=(0.0, None))
+        call_timeout = declare(self, "call_timeout", 600.0, "s a single service call may "
+                               "take", range=(0.0, None))
+        describe_use_sim_time(self)
         self.received = {}
         self.create_subscription(DemonstrationMsg, "demonstrations", self.on_demonstration,
                                  demonstration_qos(self.n_expected))
@@ -85,8 +104,7 @@ class Experiment(Node):
             for name in self.setup.learners}
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
-        self.calls = ServiceCalls(self, self.spinner, float(declare("call_timeout", 600.0)),
-                                  stop)
+        self.calls = ServiceCalls(self, self.spinner, call_timeout, stop)
 
     def on_demonstration(self, msg):
         self.received[(msg.shape, msg.index)] = Demonstration(

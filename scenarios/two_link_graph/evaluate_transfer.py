@@ -37,32 +37,48 @@ from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
 from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.srv import StepRobot, TransferPoints
-from lpa_transfer_nodes._ros_util import (call_service, from_matrix, robot_stepper, run_job,
-                                          to_matrix, wait_for_services)
+from lpa_transfer_nodes._ros_util import (call_service, declare, describe_use_sim_time,
+                                          from_matrix, robot_stepper, run_job, to_matrix,
+                                          wait_for_services)
 
 
 class TransferEvaluation(Node):
     def __init__(self, stop):
         super().__init__("transfer_evaluation")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
         self.stop = stop
-        self.robots = {side: load_robot_params(declare(f"{side}_robot", ""))
-                       for side in ("source", "target")}
-        self.model_id = declare("model_id", "")
-        self.correspondence_file = declare("correspondence_file", "")
-        self.output_dir = Path(declare("output_dir", "."))
-        self.experience = BabblingProgram("joint_lines", declare("n_segments", 200),
-                                          declare("samples_per_segment", 5),
-                                          declare("seed", 1))
-        self.steps_per_sample = declare("steps_per_sample", 400)
-        self.n_test = declare("n_test", 10000)
-        self.test_seed = declare("test_seed", 2)
-        self.n_neighbors = declare("n_neighbors", 10)
-        self.timeout = float(declare("wait_timeout", 30.0))
+        self.robots = {side: load_robot_params(declare(
+            self, f"{side}_robot", "", f"the {side} robot's parameter file; required"))
+            for side in ("source", "target")}
+        self.model_id = declare(self, "model_id", "", "the mapping service's model that "
+                                "transfers the source's experience")
+        self.correspondence_file = declare(self, "correspondence_file", "", "the collector's "
+                                           "correspondences (.npz): the target's samples are "
+                                           "the no-transfer baseline")
+        self.output_dir = Path(declare(self, "output_dir", ".", "where evaluation.json and "
+                                       "report.txt go"))
+        self.experience = BabblingProgram(
+            "joint_lines",
+            declare(self, "n_segments", 200, "the source's own experience: joint-space lines",
+                    range=(1, None)),
+            declare(self, "samples_per_segment", 5, "samples per line", range=(1, None)),
+            declare(self, "seed", 1, "seed of the experience's babbling", range=(0, None)))
+        self.steps_per_sample = declare(self, "steps_per_sample", 400, "physics steps between "
+                                        "samples", range=(1, None))
+        self.n_test = declare(self, "n_test", 10000, "uniform test joints (and source test "
+                              "points for the mapping error)", range=(1, None))
+        self.test_seed = declare(self, "test_seed", 2, "seed of the test points",
+                                 range=(0, None))
+        self.n_neighbors = declare(self, "n_neighbors", 10, "neighbours of the target's "
+                                   "forward-kinematics learner (locally weighted regression)",
+                                   range=(1, None))
+        self.timeout = declare(self, "wait_timeout", 30.0, "s to wait for the services, and "
+                               "for each call", range=(0.0, None))
+        describe_use_sim_time(self)
         self.step_clients = {side: self.create_client(StepRobot, f"/{side}/robot_sim/step")
                              for side in ("source", "target")}
         self.transfer_client = self.create_client(TransferPoints, declare(
-            "transfer_service", "/lpa_mapping/transfer"))
+            self, "transfer_service", "/lpa_mapping/transfer", "the mapping service's "
+            "TransferPoints service"))
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
 
@@ -93,7 +109,7 @@ class TransferEvaluation(Node):
 
     def run(self):
         wait_for_services([*self.step_clients.values(), self.transfer_client], self.timeout,
-                          self.stop)
+                          self.stop, self.spinner)
         start = time.perf_counter()
         source, target = self.robots["source"], self.robots["target"]
         experience, source_seconds = self.babble("source")
