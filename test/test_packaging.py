@@ -11,7 +11,7 @@ KEYS = {"numpy": "python3-numpy", "scipy": "python3-scipy", "sklearn": "python3-
         "yaml": "python3-yaml", "pybullet": "python3-pybullet-pip", "mcap": "python3-mcap-pip",
         "movement_primitives": "python3-movement-primitives-pip", "rclpy": "rclpy",
         "std_msgs": "std_msgs", "sensor_msgs": "sensor_msgs", "geometry_msgs": "geometry_msgs",
-        "builtin_interfaces": "builtin_interfaces",
+        "builtin_interfaces": "builtin_interfaces", "rcl_interfaces": "rcl_interfaces",
         "lpa_transfer_interfaces": "lpa_transfer_interfaces",
         "zstandard": "python3-zstandard"}
 #: needed without an import of their own: what movement_primitives' dmp imports, and the
