@@ -41,6 +41,7 @@ from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer.inverse_dynamics.tasks import star_task
+from lpa_transfer.inverse_dynamics.interpolation import interpolated
 
 from bench.id_mapping_quality import held_out_predictions   # the same held-out blocks
 
@@ -165,6 +166,9 @@ def main(argv=None):
     parser.add_argument("--time-law", default=None, help="minimum_jerk (default) or linear")
     parser.add_argument("--lwpr", type=json.loads, default=None,
                         help="JSON of LWPR hyperparameters replacing the config's, both robots")
+    parser.add_argument("--interpolation", default="none",
+                        help="none (default) or spline: the pairs (per babbling line) and the "
+                             "source's experience (per trial) read off smoothing splines")
     args = parser.parse_args(argv)
     config = yaml.safe_load(args.config.read_text())
     experiment = config["experiment"]["ros__parameters"]
@@ -176,6 +180,10 @@ def main(argv=None):
                   for name in names}
         pairs = dict(zip(names, babble(config, [robots[name] for name in names], star,
                                        args.seed)))
+        line = config["/babbling/*"]["ros__parameters"]["samples_per_segment"]
+        dt = robots[names[0]].dt
+        pairs = {name: interpolated(rows, args.interpolation, line, dt)
+                 for name, rows in pairs.items()}
         scratch_errors, experience = {}, {}
         for name in names:     # each robot's star from scratch: the source's experience
             scratch_errors[name], experience[name] = robots[name].trials(
@@ -193,7 +201,9 @@ def main(argv=None):
                   f"q̈ {nmse[2]:.2f}, τ {nmse[3]:.2f}")
             initial = {"uninitialised": None, "random": pairs[target],
                        **{f"transfer-{name}": make().fit(pairs[source], pairs[target])
-                          .transfer(experience[source]) for name, make in models.items()},
+                          .transfer(interpolated(experience[source], args.interpolation,
+                                                 len(robots[source].trajectory[0]), dt))
+                          for name, make in models.items()},
                        "oracle": experience[target]}
             for name in models:   # the source's experience, then the own babbling (learned last)
                 initial[f"own+transfer-{name}"] = np.vstack((initial[f"transfer-{name}"],
