@@ -12,6 +12,13 @@ points into the target domain through a stored model; ``~/list``, ``~/describe``
 a restarted service answers as before. Every bad request is answered with ``success=false``
 and the library's message; the node keeps serving.
 
+Limits (parameters): one request's work is bounded. A fit of more than ``max_fit_points``
+correspondences, with more than ``max_n_init`` initEM restarts (LPA Alg. 5) or a ``k_max``
+above ``max_k_max`` is refused, naming the parameter and its value; ``k_max = 0`` means at
+most ``max_k_max`` clusters (the same model as an unbounded fit that stays below it). A
+transfer through an LPA model (Alg. 4) runs in blocks of about ``transfer_block_elements``
+points x clusters (:func:`lpa_transfer.transfer.model_store.transfer_in_blocks`).
+
 From your own node, call it through :class:`lpa_transfer_nodes.mapping_client.MappingClient`.
 Parameters, topics, services and FitModel's hyperparameters (latent_dim, n_min, c_min, ...):
 docs/nodes.md.
@@ -51,6 +58,41 @@ def fit_hyperparameters(request):
                 random_state=request.random_state)
 
 
+#: Limits of one request's work: parameter name -> (default, description).
+LIMITS = {
+    "max_fit_points": (200_000, "most correspondences one fit may use; a fit with more is "
+                                "refused"),
+    "max_n_init": (20, "most initEM restarts (FitModel n_init) one LPA fit may ask for; more is "
+                       "refused"),
+    "max_k_max": (2000, "most clusters one LPA fit may create: a larger FitModel k_max is "
+                        "refused, k_max = 0 means this many"),
+    "transfer_block_elements": (20_000_000, "a transfer through an LPA model runs in blocks of "
+                                            "rows of about this many points x clusters, so "
+                                            "that its work memory stays bounded"),
+}
+
+
+def limited(hyperparameters, n_points, limits):
+    """The hyperparameters of a fit within the service's ``limits`` (parameter -> value):
+    ``k_max = None`` (0 in the request) becomes ``max_k_max``; more correspondences than
+    ``max_fit_points``, an n_init above ``max_n_init`` or a k_max above ``max_k_max`` is a
+    ValueError naming the limit parameter and its value."""
+    def refuse(what, name):
+        raise ValueError(f"{what} exceeds the limit {name} = {limits[name]} (a parameter of "
+                         f"lpa_mapping)")
+    if n_points > limits["max_fit_points"]:
+        refuse(f"the fit's {n_points} correspondences", "max_fit_points")
+    hyperparameters = dict(hyperparameters)
+    if "n_init" in hyperparameters:
+        if hyperparameters["n_init"] > limits["max_n_init"]:
+            refuse(f"n_init = {hyperparameters['n_init']}", "max_n_init")
+        if hyperparameters["k_max"] is None:
+            hyperparameters["k_max"] = limits["max_k_max"]
+        elif hyperparameters["k_max"] > limits["max_k_max"]:
+            refuse(f"k_max = {hyperparameters['k_max']}", "max_k_max")
+    return hyperparameters
+
+
 class MappingService(Node):
     """Thin ROS adapter over :class:`~lpa_transfer.transfer.model_store.ModelStore`."""
 
@@ -59,6 +101,8 @@ class MappingService(Node):
         model_dir = declare(self, "model_dir", "~/.lpa_transfer/models",
                             "directory where models are persisted, one .npz per model id; all "
                             "are reloaded on start")
+        self.limits = {name: declare(self, name, default, description, range=(1, None))
+                       for name, (default, description) in LIMITS.items()}
         describe_use_sim_time(self)
         self.store = ModelStore(model_dir)
         self.received = {}
@@ -116,8 +160,9 @@ class MappingService(Node):
 
     def fit(self, request, response):
         source, target = self.correspondences(request)
+        hyperparameters = limited(fit_hyperparameters(request), len(source), self.limits)
         model = self.store.fit(request.model_id, request.method, source, target,
-                               **fit_hyperparameters(request))
+                               **hyperparameters)
         response.n_clusters = int(getattr(model, "n_clusters_", 1))
         response.n_points = int(model.n_correspondences_)
         response.training_rmse = training_rmse(model, source, target)
@@ -127,7 +172,8 @@ class MappingService(Node):
         return message
 
     def transfer(self, request, response):
-        target = self.store.transfer(request.model_id, from_matrix(request.source, "source"))
+        target = self.store.transfer(request.model_id, from_matrix(request.source, "source"),
+                                     self.limits["transfer_block_elements"])
         response.target = to_matrix(target)
         return f"transferred {len(target)} points"
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lpa_transfer.transfer import gmm
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.model_io import TEMPORARY_PREFIX, load_model
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
@@ -26,6 +27,50 @@ def training_rmse(model, source, target):
     """Root-mean-square Euclidean error of the model on its correspondences."""
     error = model.transfer(source) - np.asarray(target, dtype=np.float64)
     return float(np.sqrt((error ** 2).sum(axis=1).mean()))
+
+
+def block_rows(model, block_elements):
+    """Rows per block of a blocked transfer through ``model``: about ``block_elements``
+    (points x clusters) for an LPA model, None (one block) for PA or ``block_elements=None``.
+
+    A multiple of the rows of the responsibility blocks that LPA's transfer computes anyway
+    (:func:`lpa_transfer.transfer.gmm.row_blocks`), so that both see the same blocks of rows.
+    """
+    n_clusters = getattr(model, "n_clusters_", None)
+    if block_elements is None or n_clusters is None:
+        return None
+    dim = len(model.cluster_dims_)
+    width = max(int(n_clusters), dim * (dim + 1) // 2 + dim)   # as Responsibilities.blocks
+    step = max(1, gmm._BLOCK_ELEMENTS // width)
+    return max(step, int(block_elements) // int(n_clusters) // step * step)
+
+
+def transfer_in_blocks(model, source, block_elements=None):
+    """``model.transfer(source)`` (LPA Alg. 4) computed block of rows by block of rows, so
+    that the work arrays of an LPA transfer stay near ``block_elements`` (points x clusters)
+    however many points there are; the result (M, D_t) is written into one array. The same
+    values as one call, to the last bit or within 1e-12 (the sparse path of
+    :func:`~lpa_transfer.transfer.local_procrustes.mix_local_maps` may group its matrix
+    products differently). Bad input raises ValueError naming the row in ``source``.
+    """
+    rows = block_rows(model, block_elements)
+    source = np.asarray(source, dtype=np.float64) if rows is not None else source
+    if (rows is None or source.ndim != 2 or len(source) <= rows
+            or source.shape[1] != model.n_features_in_):
+        return model.transfer(source)      # one block; the library checks the input
+    out = np.empty((len(source), int(model.n_features_out_)))
+    for start in range(0, len(source), rows):
+        block = source[start:start + rows]
+        finite = np.isfinite(block)
+        if not finite.all():
+            row = start + int(np.argwhere(~finite)[0, 0])
+            raise ValueError(f"source contains NaN or infinite values (first in row {row})")
+        try:
+            out[start:start + rows] = model.transfer(block)
+        except ValueError as exc:
+            raise ValueError(f"{exc} (in the block of source rows {start}-"
+                             f"{start + len(block) - 1})") from None
+    return out
 
 
 def method_of(model):
@@ -127,9 +172,10 @@ class ModelStore:
         self._models[model_id] = model
         return model
 
-    def transfer(self, model_id, source):
-        """Map source points through the model ``model_id``."""
-        return self.get(model_id).transfer(source)
+    def transfer(self, model_id, source, block_elements=None):
+        """Map source points through the model ``model_id``; an LPA model in blocks of about
+        ``block_elements`` points x clusters (:func:`transfer_in_blocks`)."""
+        return transfer_in_blocks(self.get(model_id), source, block_elements)
 
     def describe(self, model_id):
         """Method, dimensions, number of local maps and correspondences, hyperparameters."""
