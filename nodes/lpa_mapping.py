@@ -19,13 +19,34 @@ most ``max_k_max`` clusters (the same model as an unbounded fit that stays below
 transfer through an LPA model (Alg. 4) runs in blocks of about ``transfer_block_elements``
 points x clusters (:func:`lpa_transfer.transfer.model_store.transfer_in_blocks`).
 
+Concurrency: the node runs on a MultiThreadedExecutor (``EXECUTOR_THREADS`` threads) with
+three callback groups: ``~/fit`` in a mutually exclusive group (one fit at a time),
+``~/transfer``, ``~/describe``, ``~/list`` and ``~/delete`` in a reentrant group, the
+correspondence topics in a third group. A fit thus runs in its own thread while transfers on
+stored models are answered in others, with the same values as when nothing else runs; the
+store swaps a refitted model in atomically under its lock, so until the new model is saved
+the old one answers. Threads, not a worker process: numpy releases the GIL in its BLAS calls
+and array loops, and LPA's fit (Alg. 3, 5) is vectorised (no per-point Python loop), so its
+Python holds the GIL only in short stretches. Measured (bench/bench_mapping_limits.py
+``--latency``, bench/README.md): transfers answered within the 100 ms p99 goal while a
+20,000-point 20-D LPA fit runs; a worker process would add pickling of the correspondences
+and the model and a second interpreter for no gain in latency. SIGINT/SIGTERM during a fit:
+the node exits without waiting for it (nothing is stored; an interrupted save leaves the old
+file, see the model store).
+
 From your own node, call it through :class:`lpa_transfer_nodes.mapping_client.MappingClient`.
 Parameters, topics, services and FitModel's hyperparameters (latent_dim, n_min, c_min, ...):
 docs/nodes.md.
 """
 import json
+import os
+import sys
+import threading
+from functools import partial
 
 import numpy as np
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, declare,
@@ -39,6 +60,8 @@ from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, L
 
 
 LPA_DEFAULTS = LocalProcrustesAnalysis().get_params()
+#: Threads of the node's executor: a fit, the correspondence topics and concurrent transfers.
+EXECUTOR_THREADS = 4
 
 
 def fit_hyperparameters(request):
@@ -105,26 +128,33 @@ class MappingService(Node):
                        for name, (default, description) in LIMITS.items()}
         describe_use_sim_time(self)
         self.store = ModelStore(model_dir)
-        self.received = {}
+        self.received, self.received_lock = {}, threading.Lock()
+        self.fitting = threading.Event()
+        fits, answers, topics = (MutuallyExclusiveCallbackGroup(), ReentrantCallbackGroup(),
+                                 MutuallyExclusiveCallbackGroup())
         self.create_subscription(CorrespondenceSample, "correspondences", self.on_sample,
-                                 SAMPLE_QOS)
+                                 SAMPLE_QOS, callback_group=topics)
         self.create_subscription(CorrespondenceBatch, "correspondence_batch", self.on_batch,
-                                 BATCH_QOS)
+                                 BATCH_QOS, callback_group=topics)
         for error in self.store.load_errors:
             self.get_logger().warning(f"skipped a model file: {error}")
-        for name, srv_type, handler in (
-                ("fit", FitModel, self.fit), ("transfer", TransferPoints, self.transfer),
-                ("list", ListModels, self.list), ("describe", DescribeModel, self.describe),
-                ("delete", DeleteModel, self.delete)):
-            self.create_service(srv_type, f"~/{name}", answering(self, name, handler))
+        for name, srv_type, handler, group in (
+                ("fit", FitModel, self.fit, fits),
+                ("transfer", TransferPoints, self.transfer, answers),
+                ("list", ListModels, self.list, answers),
+                ("describe", DescribeModel, self.describe, answers),
+                ("delete", DeleteModel, self.delete, answers)):
+            self.create_service(srv_type, f"~/{name}", answering(self, name, handler),
+                                callback_group=group)
         self.get_logger().info(f"serving {len(self.store.ids())} models from "
                                f"{self.store.directory}: {self.store.ids()}")
 
     def on_sample(self, msg):
         pair = f"{msg.source_robot}->{msg.target_robot}"
-        if msg.index == 0 or pair not in self.received:
-            self.received[pair] = {}
-        self.received[pair][msg.index] = (np.array(msg.source), np.array(msg.target))
+        with self.received_lock:
+            if msg.index == 0 or pair not in self.received:
+                self.received[pair] = {}
+            self.received[pair][msg.index] = (np.array(msg.source), np.array(msg.target))
 
     def on_batch(self, msg):
         try:
@@ -132,14 +162,16 @@ class MappingService(Node):
         except ValueError as exc:
             self.get_logger().warning(f"ignoring a correspondence batch: {exc}")
             return
-        self.received[f"{msg.source_robot}->{msg.target_robot}"] = dict(enumerate(rows))
+        with self.received_lock:
+            self.received[f"{msg.source_robot}->{msg.target_robot}"] = dict(enumerate(rows))
 
     def received_correspondences(self, pair):
         """(source, target) arrays of a received pair's correspondences, in index order."""
-        if pair not in self.received:
-            raise ValueError(f"no correspondences received for the robot pair {pair!r}; "
-                             f"received: {sorted(self.received)}")
-        samples = [self.received[pair][index] for index in sorted(self.received[pair])]
+        with self.received_lock:
+            if pair not in self.received:
+                raise ValueError(f"no correspondences received for the robot pair {pair!r}; "
+                                 f"received: {sorted(self.received)}")
+            samples = [self.received[pair][index] for index in sorted(self.received[pair])]
         for side, name in enumerate(("source", "target")):
             widths = {len(sample[side]) for sample in samples}
             if len(widths) > 1:
@@ -161,8 +193,14 @@ class MappingService(Node):
     def fit(self, request, response):
         source, target = self.correspondences(request)
         hyperparameters = limited(fit_hyperparameters(request), len(source), self.limits)
-        model = self.store.fit(request.model_id, request.method, source, target,
-                               **hyperparameters)
+        self.get_logger().info(f"fitting {request.method} model {request.model_id!r} on "
+                               f"{len(source)} correspondences")
+        self.fitting.set()
+        try:
+            model = self.store.fit(request.model_id, request.method, source, target,
+                                   **hyperparameters)
+        finally:
+            self.fitting.clear()
         response.n_clusters = int(getattr(model, "n_clusters_", 1))
         response.n_points = int(model.n_correspondences_)
         response.training_rmse = training_rmse(model, source, target)
@@ -195,7 +233,13 @@ class MappingService(Node):
 
 
 def main(args=None):
-    serve("lpa_mapping", lambda stop: MappingService(), args)
+    nodes = []
+    serve("lpa_mapping", lambda stop: nodes.append(MappingService()) or nodes[0], args,
+          executor_class=partial(MultiThreadedExecutor, num_threads=EXECUTOR_THREADS))
+    if nodes and nodes[0].fitting.is_set():   # stopped during a fit: do not wait for it
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ file, see :mod:`lpa_transfer.transfer.model_io`). The file name is the id percen
 plain file name, the mapping is reversible (the id survives a restart with no index file to
 keep in step) and no model file starts with ``.`` like the library's temporary files.
 """
+import threading
 import urllib.parse
 from pathlib import Path
 
@@ -110,6 +111,11 @@ class ModelStore:
     killed are removed; a model file under a name that is not its id's (placed by hand, e.g.
     ``pa.v2.npz`` for id ``pa.v2``) is renamed to it, or quarantined if the id's own file is
     there too, so that one id is one file and ``delete`` removes it.
+
+    Thread-safe: fits, transfers, descriptions and deletions may run in several threads. A
+    fit computes its model without a lock, then saves it and swaps it in under the store's
+    write lock, so a model being refitted answers with its previous version until the new one
+    is saved and stored, and the file and the served model change together.
     """
 
     QUARANTINE = "quarantine"
@@ -118,6 +124,8 @@ class ModelStore:
         self.directory = Path(directory).expanduser()
         self.directory.mkdir(parents=True, exist_ok=True)
         self._models, self.load_errors, self.quarantined = {}, [], []
+        self._lock = threading.Lock()           # the dict of models: lookups and the swap
+        self._write_lock = threading.Lock()     # one save or delete at a time
         for stale in self.directory.glob(TEMPORARY_PREFIX + "*" + SUFFIX):
             stale.unlink(missing_ok=True)     # a save killed before its rename
         for path in sorted(self.directory.glob("*" + SUFFIX)):
@@ -150,14 +158,16 @@ class ModelStore:
 
     def ids(self):
         """The stored model ids, sorted."""
-        return sorted(self._models)
+        with self._lock:
+            return sorted(self._models)
 
     def get(self, model_id):
         """The model stored under ``model_id``; ValueError names the known ids."""
-        try:
-            return self._models[model_id]
-        except KeyError:
-            raise ValueError(f"unknown model id {model_id!r}; known: {self.ids()}") from None
+        with self._lock:
+            model = self._models.get(model_id)
+        if model is None:
+            raise ValueError(f"unknown model id {model_id!r}; known: {self.ids()}")
+        return model
 
     def fit(self, model_id, method, source, target, **hyperparameters):
         """Fit a ``method`` model on the correspondences, save it under ``model_id`` (replacing
@@ -168,8 +178,10 @@ class ModelStore:
         if unknown:
             raise ValueError(f"method {method!r} has no hyperparameters {unknown}")
         model = cls(**hyperparameters).fit(source, target)
-        model.save(path)
-        self._models[model_id] = model
+        with self._write_lock:
+            model.save(path)
+            with self._lock:
+                self._models[model_id] = model
         return model
 
     def transfer(self, model_id, source, block_elements=None):
@@ -187,6 +199,8 @@ class ModelStore:
 
     def delete(self, model_id):
         """Forget the model ``model_id`` and remove its file."""
-        self.get(model_id)
-        self.path(model_id).unlink(missing_ok=True)
-        del self._models[model_id]
+        with self._write_lock:
+            self.get(model_id)
+            self.path(model_id).unlink(missing_ok=True)
+            with self._lock:
+                del self._models[model_id]
