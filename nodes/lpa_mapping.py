@@ -5,10 +5,10 @@ Run: ``lpa_mapping --ros-args -p model_dir:=/path`` (or
 
 A thin ROS adapter over :class:`lpa_transfer.transfer.model_store.ModelStore`. ``~/fit`` fits
 a ``"pa"`` or ``"lpa"`` model on correspondences between a source and a target robot (given in
-the request, read from a correspondence file, or received on the ``correspondences`` and
-``correspondence_batch`` topics) and stores it under a model id; ``~/transfer`` maps source
-points into the target domain through a stored model; ``~/list``, ``~/describe`` and
-``~/delete`` manage the models. Models persist in ``model_dir`` and are reloaded on start, so
+the request, read from a correspondence file inside ``data_dir``, or received on the
+``correspondences`` and ``correspondence_batch`` topics) and stores it under a model id;
+``~/transfer`` maps source points into the target domain through a stored model; ``~/list``,
+``~/describe`` and ``~/delete`` manage the models. Models persist in ``model_dir`` and are reloaded on start, so
 a restarted service answers as before. Every bad request is answered with ``success=false``
 and the library's message; the node keeps serving.
 
@@ -43,6 +43,7 @@ import os
 import sys
 import threading
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
@@ -124,10 +125,16 @@ class MappingService(Node):
         model_dir = declare(self, "model_dir", "~/.lpa_transfer/models",
                             "directory where models are persisted, one .npz per model id; all "
                             "are reloaded on start")
+        data_dir = declare(self, "data_dir", "",
+                           "directory of the correspondence files FitModel's correspondence_file "
+                           "may name (relative to it; nothing outside it is read); empty: the "
+                           "folder 'correspondences' beside model_dir")
         self.limits = {name: declare(self, name, default, description, range=(1, None))
                        for name, (default, description) in LIMITS.items()}
         describe_use_sim_time(self)
         self.store = ModelStore(model_dir)
+        self.data_dir = Path(data_dir or self.store.directory.parent / "correspondences")
+        self.data_dir = self.data_dir.expanduser().resolve()
         self.received, self.received_lock = {}, threading.Lock()
         self.fitting = threading.Event()
         fits, answers, topics = (MutuallyExclusiveCallbackGroup(), ReentrantCallbackGroup(),
@@ -179,12 +186,22 @@ class MappingService(Node):
                                  f"lengths {sorted(widths)}")
         return tuple(np.array([sample[side] for sample in samples]) for side in (0, 1))
 
+    def correspondence_path(self, name):
+        """The file ``name`` names inside ``data_dir`` (a relative name is taken in it); one
+        that resolves outside it (an absolute path, ``..``, a symbolic link) is a ValueError."""
+        path = (self.data_dir / name).resolve()
+        if not path.is_relative_to(self.data_dir):
+            raise ValueError(f"correspondence_file {name!r} is outside the data directory "
+                             f"{self.data_dir} (the parameter data_dir): only files in it are "
+                             f"read; give a path relative to it")
+        return path
+
     def correspondences(self, request):
         """The request's correspondences: its matrices, else its file, else a received pair."""
         if request.source.data or request.target.data:
             return from_matrix(request.source, "source"), from_matrix(request.target, "target")
         if request.correspondence_file:
-            return load_correspondences(request.correspondence_file)
+            return load_correspondences(self.correspondence_path(request.correspondence_file))
         if request.received_pair:
             return self.received_correspondences(request.received_pair)
         raise ValueError("no correspondences: send source and target, a correspondence_file "

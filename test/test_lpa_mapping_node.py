@@ -101,12 +101,14 @@ def test_minimal_lpa_request_uses_the_library_defaults(service, data):
     assert client.call("delete", model_id="minimal").success
 
 
-def test_fit_from_a_correspondence_file(service, data, tmp_path):
-    client, _, _ = service
+def test_fit_from_a_correspondence_file(service, data):
+    """In the default data_dir, the folder 'correspondences' beside model_dir."""
+    client, model_dir, _ = service
     (source, target), test = data
-    np.savez(tmp_path / "pairs.npz", source=source, target=target)
+    (model_dir.parent / "correspondences").mkdir(exist_ok=True)
+    np.savez(model_dir.parent / "correspondences" / "pairs.npz", source=source, target=target)
     answer = client.call("fit", model_id="from-file", method="pa",
-                         correspondence_file=str(tmp_path / "pairs.npz"))
+                         correspondence_file="pairs.npz")
     assert answer.success and answer.n_points == 300 and answer.n_clusters == 1, answer.message
     assert answer.training_rmse > 0
     client.call("delete", model_id="from-file")
