@@ -234,7 +234,10 @@ class MappingService(Node):
 
     def list(self, request, response):
         response.model_ids = self.store.ids()
-        return f"{len(response.model_ids)} models"
+        response.quarantined_ids = list(self.store.quarantined)
+        quarantined = (f"; {len(response.quarantined_ids)} quarantined at start"
+                       if response.quarantined_ids else "")
+        return f"{len(response.model_ids)} models{quarantined}"
 
     def describe(self, request, response):
         info = self.store.describe(request.model_id)

@@ -1,0 +1,53 @@
+"""ListModels names the model files quarantined at start (issue 29 item 1), on a node in its
+own process, which serves the other models as before."""
+import numpy as np
+
+from lpa_transfer import LocalProcrustesAnalysis
+from lpa_transfer.transfer.model_store import file_name
+from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from test_lpa_mapping_node import MappingClient, matrix, points
+from two_link import correspondences
+
+
+def test_corrupt_files_at_start_are_listed_as_quarantined_and_the_rest_served(tmp_path):
+    models = tmp_path / "models"
+    models.mkdir()
+    (source, target), test = correspondences(200, seed=1), correspondences(50, seed=2)[0]
+    good = LocalProcrustesAnalysis(n_min=10).fit(source, target)
+    good.save(models / file_name("good/lpa"))
+    good.save(models / file_name("truncated"))
+    truncated = models / file_name("truncated")
+    truncated.write_bytes(truncated.read_bytes()[:300])
+    (models / file_name("not a model")).write_bytes(b"hello")
+    domain_id = unique_domain_id()
+    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log",
+                       ros_params(model_dir=models))
+    client = MappingClient(domain_id)
+    try:
+        listed = client.call("list")
+        assert listed.success, listed.message
+        assert list(listed.model_ids) == ["good/lpa"]
+        assert sorted(listed.quarantined_ids) == ["not a model", "truncated"]
+        assert "2 quarantined" in listed.message, listed.message
+        answer = client.call("transfer", model_id="good/lpa", source=matrix(test))
+        assert np.array_equal(points(answer.target), good.transfer(test))
+        refused = client.call("transfer", model_id="truncated", source=matrix(test))
+        assert not refused.success and "unknown model id 'truncated'" in refused.message
+    finally:
+        client.close()
+        assert node.stop() == 0, node.log()
+    assert sorted(p.name for p in (models / "quarantine").iterdir()) == sorted(
+        [file_name("truncated"), file_name("not a model")])
+
+
+def test_a_clean_start_lists_no_quarantined_ids(tmp_path):
+    domain_id = unique_domain_id()
+    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log",
+                       ros_params(model_dir=tmp_path / "models"))
+    client = MappingClient(domain_id)
+    try:
+        listed = client.call("list")
+        assert listed.success and list(listed.quarantined_ids) == [], listed
+    finally:
+        client.close()
+        assert node.stop() == 0, node.log()
