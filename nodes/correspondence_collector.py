@@ -52,7 +52,7 @@ from lpa_transfer.transfer.cross_validation import held_out_nmse
 from lpa_transfer.transfer.model_store import METHODS
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
-from lpa_transfer_nodes.lpa_mapping import fit_hyperparameters
+from lpa_transfer_nodes.lpa_mapping import feature_columns, fit_hyperparameters
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, call_service, declare,
                                           declare_array, describe_use_sim_time,
                                           robot_resetter, robot_stepper, run_job, sim_stamp,
@@ -334,8 +334,14 @@ class CorrespondenceCollector(Node):
         self.batch_pub.publish(msg)
 
     def fit_request(self, pairs):
-        return FitModel.Request(model_id=self.model_id, source=to_matrix(pairs.source),
-                                target=to_matrix(pairs.target), **self.fit_fields)
+        """The FitModel request, with the robots' names and the columns' names as metadata."""
+        return FitModel.Request(
+            model_id=self.model_id, source=to_matrix(pairs.source),
+            target=to_matrix(pairs.target), source_robot=pairs.source_robot,
+            target_robot=pairs.target_robot,
+            source_features=feature_columns(pairs.features, pairs.source.shape[1]),
+            target_features=feature_columns(pairs.features, pairs.target.shape[1]),
+            **self.fit_fields)
 
     def held_out(self, pairs):
         """The k-fold held-out nMSE of the model the service will fit, and of PA (metadata)."""

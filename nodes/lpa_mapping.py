@@ -54,7 +54,8 @@ from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, decl
                                           describe_use_sim_time, from_matrix, serve, to_matrix)
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.exploration.correspondences import load_correspondences
-from lpa_transfer.transfer.model_store import ModelStore, training_rmse
+from lpa_transfer.exploration.correspondences import JOINT_FEATURES
+from lpa_transfer.transfer.model_store import METADATA, ModelStore
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
@@ -117,6 +118,41 @@ def limited(hyperparameters, n_points, limits):
     return hyperparameters
 
 
+def feature_columns(features, width):
+    """Names of the ``width`` columns of samples made of ``features`` (the correspondence
+    files' ``features``, in the order ``feature_vector`` concatenates them): a joint feature
+    gives one column per joint (``position[0]``, ``position[1]``, ...), any other one column
+    (``ee_x``); ``[]`` when ``width`` does not fit them."""
+    features = [str(feature) for feature in features]
+    joint = [feature for feature in features if feature in JOINT_FEATURES]
+    n_joints, rest = divmod(width - (len(features) - len(joint)), max(1, len(joint)))
+    if not features or rest or n_joints < (1 if joint else 0) or (not joint and n_joints):
+        return []
+    names = []
+    for feature in features:
+        names += ([f"{feature}[{j}]" for j in range(n_joints)] if feature in JOINT_FEATURES
+                  else [feature])
+    return names
+
+
+def file_metadata(path, source_dim, target_dim):
+    """What a correspondence file says of its robots and columns (its ``source_robot``,
+    ``target_robot`` and ``features`` entries, as the collector saves them): metadata for
+    the model; ``{}`` for what it does not have."""
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            entries = {key: archive[key] for key in ("source_robot", "target_robot", "features")
+                       if key in archive.files}
+    except (OSError, ValueError):
+        return {}
+    metadata = {key: str(entries[key]) for key in ("source_robot", "target_robot")
+                if key in entries and entries[key].ndim == 0}
+    if "features" in entries and entries["features"].ndim == 1:
+        metadata["source_features"] = feature_columns(entries["features"], source_dim)
+        metadata["target_features"] = feature_columns(entries["features"], target_dim)
+    return {key: value for key, value in metadata.items() if value}
+
+
 class MappingService(Node):
     """Thin ROS adapter over :class:`~lpa_transfer.transfer.model_store.ModelStore`."""
 
@@ -135,7 +171,7 @@ class MappingService(Node):
         self.store = ModelStore(model_dir)
         self.data_dir = Path(data_dir or self.store.directory.parent / "correspondences")
         self.data_dir = self.data_dir.expanduser().resolve()
-        self.received, self.received_lock = {}, threading.Lock()
+        self.received, self.received_robots, self.received_lock = {}, {}, threading.Lock()
         self.fitting = threading.Event()
         fits, answers, topics = (MutuallyExclusiveCallbackGroup(), ReentrantCallbackGroup(),
                                  MutuallyExclusiveCallbackGroup())
@@ -161,6 +197,7 @@ class MappingService(Node):
         with self.received_lock:
             if msg.index == 0 or pair not in self.received:
                 self.received[pair] = {}
+                self.received_robots[pair] = (msg.source_robot, msg.target_robot)
             self.received[pair][msg.index] = (np.array(msg.source), np.array(msg.target))
 
     def on_batch(self, msg):
@@ -169,22 +206,27 @@ class MappingService(Node):
         except ValueError as exc:
             self.get_logger().warning(f"ignoring a correspondence batch: {exc}")
             return
+        pair = f"{msg.source_robot}->{msg.target_robot}"
         with self.received_lock:
-            self.received[f"{msg.source_robot}->{msg.target_robot}"] = dict(enumerate(rows))
+            self.received[pair] = dict(enumerate(rows))
+            self.received_robots[pair] = (msg.source_robot, msg.target_robot)
 
     def received_correspondences(self, pair):
-        """(source, target) arrays of a received pair's correspondences, in index order."""
+        """(source, target) arrays of a received pair's correspondences, in index order, and
+        the pair's robot names."""
         with self.received_lock:
             if pair not in self.received:
                 raise ValueError(f"no correspondences received for the robot pair {pair!r}; "
                                  f"received: {sorted(self.received)}")
             samples = [self.received[pair][index] for index in sorted(self.received[pair])]
+            robots = self.received_robots[pair]
         for side, name in enumerate(("source", "target")):
             widths = {len(sample[side]) for sample in samples}
             if len(widths) > 1:
                 raise ValueError(f"the {name} samples received for {pair!r} have different "
                                  f"lengths {sorted(widths)}")
-        return tuple(np.array([sample[side] for sample in samples]) for side in (0, 1))
+        source, target = (np.array([sample[side] for sample in samples]) for side in (0, 1))
+        return source, target, dict(source_robot=robots[0], target_robot=robots[1])
 
     def correspondence_path(self, name):
         """The file ``name`` names inside ``data_dir`` (a relative name is taken in it); one
@@ -197,30 +239,42 @@ class MappingService(Node):
         return path
 
     def correspondences(self, request):
-        """The request's correspondences: its matrices, else its file, else a received pair."""
+        """The request's correspondences, its matrices, else its file, else a received pair,
+        as ``(source, target, metadata)``: what the file or the pair says of the robots and
+        the columns (:func:`file_metadata`), and where they came from."""
         if request.source.data or request.target.data:
-            return from_matrix(request.source, "source"), from_matrix(request.target, "target")
+            return (from_matrix(request.source, "source"), from_matrix(request.target, "target"),
+                    dict(correspondences="request"))
         if request.correspondence_file:
-            return load_correspondences(self.correspondence_path(request.correspondence_file))
+            path = self.correspondence_path(request.correspondence_file)
+            source, target = load_correspondences(path)
+            return source, target, dict(file_metadata(path, source.shape[1], target.shape[1]),
+                                        correspondences=f"file {path}")
         if request.received_pair:
-            return self.received_correspondences(request.received_pair)
+            source, target, metadata = self.received_correspondences(request.received_pair)
+            return source, target, dict(metadata,
+                                        correspondences=f"received {request.received_pair}")
         raise ValueError("no correspondences: send source and target, a correspondence_file "
                          "or a received_pair")
 
     def fit(self, request, response):
-        source, target = self.correspondences(request)
+        source, target, found = self.correspondences(request)
         hyperparameters = limited(fit_hyperparameters(request), len(source), self.limits)
+        metadata = dict(found, **{key: value for key, value in (
+            ("source_robot", request.source_robot), ("target_robot", request.target_robot),
+            ("source_features", list(request.source_features)),
+            ("target_features", list(request.target_features))) if value})
         self.get_logger().info(f"fitting {request.method} model {request.model_id!r} on "
                                f"{len(source)} correspondences")
         self.fitting.set()
         try:
-            model = self.store.fit(request.model_id, request.method, source, target,
+            model = self.store.fit(request.model_id, request.method, source, target, metadata,
                                    **hyperparameters)
         finally:
             self.fitting.clear()
         response.n_clusters = int(getattr(model, "n_clusters_", 1))
         response.n_points = int(model.n_correspondences_)
-        response.training_rmse = training_rmse(model, source, target)
+        response.training_rmse = self.store.metadata(request.model_id)["training_rmse"]
         message = (f"fitted {request.method} model {request.model_id!r}: "
                    f"{response.n_clusters} local maps from {response.n_points} correspondences")
         self.get_logger().info(message)
@@ -244,6 +298,8 @@ class MappingService(Node):
         for field in ("method", "source_dim", "target_dim", "n_clusters", "n_points"):
             setattr(response, field, info[field])
         response.hyperparameters_json = json.dumps(info["hyperparameters"])
+        for field in METADATA:
+            setattr(response, field, info[field])
         return f"model {request.model_id!r}"
 
     def delete(self, request, response):

@@ -9,6 +9,9 @@ A model file is a NumPy ``.npz`` (zip of ``.npy`` arrays) with these entries:
 ``hyperparameters``    JSON text of the constructor arguments (``get_params()``)
 ``<attribute>_``       one entry per learned attribute (float64/int arrays; scalars as 0-d
                        arrays), named exactly as the attribute, e.g. ``coef_``, ``means_``
+``metadata``           optional: JSON text of an object describing the model (the model
+                       store's robot names, column names, training error); files without it
+                       (written before it existed) load with empty metadata
 =====================  =====================================================================
 
 Arrays are stored bit for bit, so a loaded model transfers bit-identically. Files are written
@@ -36,8 +39,9 @@ class SavableModel:
         super().__init_subclass__(**kwargs)
         _REGISTRY[cls.__name__] = cls
 
-    def save(self, path):
-        """Write the fitted model to ``path`` (see the module docstring for the format)."""
+    def save(self, path, metadata=None):
+        """Write the fitted model to ``path`` (see the module docstring for the format), with
+        ``metadata`` (a JSON-serialisable dict) if given."""
         from lpa_transfer._validation import check_fitted
         check_fitted(self)
         entries = {
@@ -46,6 +50,13 @@ class SavableModel:
             "model_class": np.array(type(self).__name__),
             "hyperparameters": np.array(json.dumps(self.get_params())),
         }
+        if metadata is not None:
+            if not isinstance(metadata, dict):
+                raise ValueError(f"metadata must be a dict, got {type(metadata).__name__}")
+            try:
+                entries["metadata"] = np.array(json.dumps(metadata, allow_nan=True))
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"metadata must be JSON-serialisable: {exc}") from None
         entries.update({name: np.asarray(getattr(self, name)) for name in self._learned})
         path = os.fspath(path)
         directory = os.path.dirname(os.path.abspath(path))
@@ -87,8 +98,14 @@ def load_model(path):
     of another format, or with learned arrays that do not fit together — raises ValueError
     naming the file and the reason (the model is tried on one point before it is returned).
     """
+    return load_model_and_metadata(path)[0]
+
+
+def load_model_and_metadata(path):
+    """``(model, metadata)`` of a model file: as :func:`load_model`, and the dict saved with
+    it (``{}`` for a file without); metadata that is not a JSON object is a ValueError."""
     try:
-        model = _read_model(path)
+        model, metadata = _read_model(path)
         model.transfer(np.zeros((1, int(model.n_features_in_))))
     except ValueError as exc:
         if str(path) in str(exc):
@@ -96,7 +113,7 @@ def load_model(path):
         raise ValueError(f"model file {path} does not hold a working model: {exc}") from None
     except Exception as exc:  # BadZipFile, zlib.error, EOFError, KeyError, shape errors...
         raise ValueError(f"cannot read model file {path}: {type(exc).__name__}: {exc}") from None
-    return model
+    return model, metadata
 
 
 def _read_model(path):
@@ -123,4 +140,9 @@ def _read_model(path):
         for name in cls._learned:
             value = archive[name]
             setattr(model, name, value.item() if value.ndim == 0 else value)
-    return model
+        metadata = {}
+        if "metadata" in archive.files:
+            metadata = json.loads(archive["metadata"].item())
+            if not isinstance(metadata, dict):
+                raise ValueError(f"{path} has metadata that is not a JSON object")
+    return model, metadata

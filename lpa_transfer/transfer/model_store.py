@@ -6,6 +6,10 @@ file, see :mod:`lpa_transfer.transfer.model_io`). The file name is the id percen
 (``urllib.parse.quote`` with no safe characters, and ``.`` encoded too), so any id maps to a
 plain file name, the mapping is reversible (the id survives a restart with no index file to
 keep in step) and no model file starts with ``.`` like the library's temporary files.
+
+Each model carries metadata (:data:`METADATA`), saved in its file (the ``metadata`` entry of
+the model file): the robots' names and the columns' names a caller gave, where the
+correspondences came from and the training error. A file without it loads with the defaults.
 """
 import threading
 import urllib.parse
@@ -15,13 +19,18 @@ import numpy as np
 
 from lpa_transfer.transfer import gmm
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.transfer.model_io import TEMPORARY_PREFIX, load_model
+from lpa_transfer.transfer.model_io import TEMPORARY_PREFIX, load_model_and_metadata
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 #: Transfer methods by the name a caller uses: one global map (PA) or local maps (LPA).
 METHODS = {"pa": ProcrustesAnalysis, "lpa": LocalProcrustesAnalysis}
 SUFFIX = ".npz"
 _MAX_FILE_NAME = 255
+#: A model's metadata and its defaults (a model file written without it): the robots' names,
+#: the names of the source and target columns (one per dimension, or none), the training
+#: RMSE (:func:`training_rmse`; NaN: unknown) and where the correspondences came from.
+METADATA = dict(source_robot="", target_robot="", source_features=[], target_features=[],
+                training_rmse=float("nan"), correspondences="")
 
 
 def training_rmse(model, source, target):
@@ -72,6 +81,33 @@ def transfer_in_blocks(model, source, block_elements=None):
             raise ValueError(f"{exc} (in the block of source rows {start}-"
                              f"{start + len(block) - 1})") from None
     return out
+
+
+def check_metadata(metadata, source_dim, target_dim):
+    """The full metadata (:data:`METADATA`'s defaults for what ``metadata`` leaves out) of a
+    model of these dimensions; ValueError for unknown keys, values of the wrong type or
+    column names that are not one per dimension."""
+    unknown = sorted(set(metadata) - set(METADATA))
+    if unknown:
+        raise ValueError(f"unknown metadata {unknown}; known: {sorted(METADATA)}")
+    full = {**METADATA, **metadata}
+    for key in ("source_robot", "target_robot", "correspondences"):
+        if not isinstance(full[key], str):
+            raise ValueError(f"{key} must be a string, got {full[key]!r}")
+    for key, dim in (("source_features", source_dim), ("target_features", target_dim)):
+        names = full[key] = list(full[key])
+        if not all(isinstance(name, str) for name in names):
+            raise ValueError(f"{key} must be strings, got {names!r}")
+        if names and len(names) != dim:
+            raise ValueError(f"{key} names {len(names)} columns but the {key.split('_')[0]} "
+                             f"has {dim}: give one name per column, or none")
+    full["training_rmse"] = float(full["training_rmse"])
+    return full
+
+
+def _copied(metadata):
+    return {key: list(value) if isinstance(value, list) else value
+            for key, value in metadata.items()}
 
 
 def method_of(model):
@@ -142,7 +178,9 @@ class ModelStore:
                     continue
                 path = path.rename(canonical)
             try:
-                self._models[model_id] = load_model(path)
+                model, metadata = load_model_and_metadata(path)
+                self._models[model_id] = (model, check_metadata(
+                    metadata, model.n_features_in_, model.n_features_out_))
             except ValueError as exc:
                 self._quarantine(path, model_id, str(exc))
 
@@ -161,27 +199,42 @@ class ModelStore:
         with self._lock:
             return sorted(self._models)
 
+    def _entry(self, model_id):
+        with self._lock:
+            entry = self._models.get(model_id)
+        if entry is None:
+            raise ValueError(f"unknown model id {model_id!r}; known: {self.ids()}")
+        return entry
+
     def get(self, model_id):
         """The model stored under ``model_id``; ValueError names the known ids."""
-        with self._lock:
-            model = self._models.get(model_id)
-        if model is None:
-            raise ValueError(f"unknown model id {model_id!r}; known: {self.ids()}")
-        return model
+        return self._entry(model_id)[0]
 
-    def fit(self, model_id, method, source, target, **hyperparameters):
-        """Fit a ``method`` model on the correspondences, save it under ``model_id`` (replacing
-        any model of that id) and return it."""
+    def metadata(self, model_id):
+        """The metadata of the model ``model_id`` (:data:`METADATA`), a copy."""
+        return _copied(self._entry(model_id)[1])
+
+    def fit(self, model_id, method, source, target, metadata=None, **hyperparameters):
+        """Fit a ``method`` model on the correspondences, save it under ``model_id`` with
+        ``metadata`` (:data:`METADATA`; the training RMSE is computed here) replacing any model
+        of that id, and return it; ``metadata(model_id)`` then gives its metadata."""
         path = self.path(model_id)
         cls = method_class(method)
         unknown = sorted(set(hyperparameters) - set(cls().get_params()))
         if unknown:
             raise ValueError(f"method {method!r} has no hyperparameters {unknown}")
-        model = cls(**hyperparameters).fit(source, target)
+        metadata = dict(metadata or {})
+        metadata.pop("training_rmse", None)
+        model = cls(**hyperparameters)
+        if np.ndim(source) == 2 and np.ndim(target) == 2:     # a bad request before the fit
+            check_metadata(metadata, np.shape(source)[1], np.shape(target)[1])
+        model.fit(source, target)
+        metadata = check_metadata(dict(metadata, training_rmse=training_rmse(
+            model, source, target)), model.n_features_in_, model.n_features_out_)
         with self._write_lock:
-            model.save(path)
+            model.save(path, metadata)
             with self._lock:
-                self._models[model_id] = model
+                self._models[model_id] = (model, metadata)
         return model
 
     def transfer(self, model_id, source, block_elements=None):
@@ -190,12 +243,14 @@ class ModelStore:
         return transfer_in_blocks(self.get(model_id), source, block_elements)
 
     def describe(self, model_id):
-        """Method, dimensions, number of local maps and correspondences, hyperparameters."""
-        model = self.get(model_id)
+        """Method, dimensions, number of local maps and correspondences, hyperparameters and
+        the model's metadata (:data:`METADATA`)."""
+        model, metadata = self._entry(model_id)       # one entry: model and metadata agree
         return dict(method=method_of(model), source_dim=int(model.n_features_in_),
                     target_dim=int(model.n_features_out_),
                     n_clusters=int(getattr(model, "n_clusters_", 1)),
-                    n_points=int(model.n_correspondences_), hyperparameters=model.get_params())
+                    n_points=int(model.n_correspondences_), hyperparameters=model.get_params(),
+                    **_copied(metadata))
 
     def delete(self, model_id):
         """Forget the model ``model_id`` and remove its file."""
