@@ -153,20 +153,20 @@ def memory(args):
     model_path = big_model(work)
     print(f"transfer of {args.points:,} points 20-D -> 16-D through {model_path.name} "
           f"(load average before: {os.getloadavg()[0]:.2f})", flush=True)
-    for label, block_elements in ((f"blocked ({DEFAULT_BLOCK_ELEMENTS:,} elements)",
-                                   DEFAULT_BLOCK_ELEMENTS), ("one call", None)):
+    cases = ((f"blocked ({DEFAULT_BLOCK_ELEMENTS:,} elements)", DEFAULT_BLOCK_ELEMENTS),
+             ("one call", None))
+    for label, block_elements in cases if not args.no_in_process else ():
         run = subprocess.run(
             [sys.executable, "-m", "bench.bench_mapping_limits", "--child", str(model_path),
              str(args.points), str(block_elements)], capture_output=True, text=True,
             check=True)
         figures = json.loads(run.stdout.strip().splitlines()[-1])
-        arrays = figures["input"] + figures["output"]
+        work_bytes = figures["traced_peak"] - figures["output"]
         print(f"  in process, {label:<30} {figures['seconds']:6.0f} s; tracemalloc peak "
-              f"{figures['traced_peak'] / MIB:7.0f} MiB = input + output "
-              f"({arrays / MIB:.0f} MiB) + {(figures['traced_peak'] - arrays) / MIB:.0f} MiB "
-              f"work; peak RSS {figures['rss_before'] / MIB:.0f} -> "
-              f"{figures['rss_after'] / MIB:.0f} MiB "
-              f"(K = {figures['clusters']})", flush=True)
+              f"{figures['traced_peak'] / MIB:5.0f} MiB = output {figures['output'] / MIB:.0f} "
+              f"MiB + {work_bytes / MIB:.1f} MiB work (the {figures['input'] / MIB:.0f} MiB "
+              f"input was made before); peak RSS {figures['rss_before'] / MIB:.0f} -> "
+              f"{figures['rss_after'] / MIB:.0f} MiB (K = {figures['clusters']})", flush=True)
     if not args.no_service:
         figures = through_service(work, args.points)
         arrays = figures["input"] + figures["output"]
@@ -189,6 +189,8 @@ def main():
                         help="--latency: points of each transfer")
     parser.add_argument("--no-service", action="store_true",
                         help="--memory: only the in-process figures")
+    parser.add_argument("--no-in-process", action="store_true",
+                        help="--memory: only the service's figures")
     parser.add_argument("--work", default=Path(tempfile.gettempdir()) / "bench_mapping_limits",
                         help="where the big model is cached and the node logs go")
     parser.add_argument("--child", nargs=3, help=argparse.SUPPRESS)

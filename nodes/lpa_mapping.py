@@ -38,6 +38,7 @@ From your own node, call it through :class:`lpa_transfer_nodes.mapping_client.Ma
 Parameters, topics, services and FitModel's hyperparameters (latent_dim, n_min, c_min, ...):
 docs/nodes.md.
 """
+import array
 import json
 import os
 import sys
@@ -51,12 +52,12 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
 from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, declare,
-                                          describe_use_sim_time, from_matrix, serve, to_matrix)
+                                          describe_use_sim_time, from_matrix, serve)
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.exploration.correspondences import load_correspondences
 from lpa_transfer.exploration.correspondences import JOINT_FEATURES
-from lpa_transfer.transfer.model_store import METADATA, ModelStore
-from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
+from lpa_transfer.transfer.model_store import METADATA, ModelStore, transfer_in_blocks
+from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample, Matrix
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
 
@@ -281,10 +282,19 @@ class MappingService(Node):
         return message
 
     def transfer(self, request, response):
-        target = self.store.transfer(request.model_id, from_matrix(request.source, "source"),
-                                     self.limits["transfer_block_elements"])
-        response.target = to_matrix(target)
-        return f"transferred {len(target)} points"
+        """Alg. 4 through a stored model, written straight into the answer's buffer; the
+        request's points are let go before the answer is serialised (a huge transfer then
+        holds about one copy of each side at a time, bench/bench_mapping_limits.py)."""
+        source = from_matrix(request.source, "source")
+        model = self.store.get(request.model_id)
+        shape = (len(source), int(model.n_features_out_))
+        data = array.array("d", [0.0]) * (shape[0] * shape[1])
+        target = np.frombuffer(data, dtype=np.float64).reshape(shape)
+        transfer_in_blocks(model, source, self.limits["transfer_block_elements"], out=target)
+        del source, target                     # the views, so that the buffers can go
+        request.source.data = array.array("d")
+        response.target = Matrix(rows=shape[0], cols=shape[1], data=data)
+        return f"transferred {shape[0]} points"
 
     def list(self, request, response):
         response.model_ids = self.store.ids()

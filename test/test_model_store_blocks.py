@@ -60,3 +60,13 @@ def test_the_store_transfers_in_blocks(tmp_path, test_points):
     np.testing.assert_allclose(store.transfer("a->b", test_points, 10_000),
                                fitted.transfer(test_points), rtol=1e-12, atol=1e-12)
     assert np.array_equal(store.transfer("a->b", test_points), fitted.transfer(test_points))
+
+
+def test_the_result_can_go_into_a_given_array(model, test_points):
+    out = np.full((len(test_points), 4), np.nan)
+    assert transfer_in_blocks(model, test_points, 10_000, out=out) is out
+    assert np.array_equal(out, transfer_in_blocks(model, test_points, 10_000))
+    pa = ProcrustesAnalysis().fit(*correspondences(50, seed=1))
+    out = np.empty((100, 4))
+    transfer_in_blocks(pa, test_points[:100], 10_000, out=out)
+    assert np.array_equal(out, pa.transfer(test_points[:100]))

@@ -55,11 +55,12 @@ def block_rows(model, block_elements):
     return max(step, int(block_elements) // int(n_clusters) // step * step)
 
 
-def transfer_in_blocks(model, source, block_elements=None):
+def transfer_in_blocks(model, source, block_elements=None, out=None):
     """``model.transfer(source)`` (LPA Alg. 4) computed block of rows by block of rows, so
     that the work arrays of an LPA transfer stay near ``block_elements`` (points x clusters)
-    however many points there are; the result (M, D_t) is written into one array. The same
-    values as one call, to the last bit or within 1e-12 (the sparse path of
+    however many points there are; the result (M, D_t) is written into one array, ``out`` if
+    given (e.g. a view of the buffer a reply is sent from). The same values as one call, to
+    the last bit or within 1e-12 (the sparse path of
     :func:`~lpa_transfer.transfer.local_procrustes.mix_local_maps` may group its matrix
     products differently). Bad input raises ValueError naming the row in ``source``.
     """
@@ -67,8 +68,13 @@ def transfer_in_blocks(model, source, block_elements=None):
     source = np.asarray(source, dtype=np.float64) if rows is not None else source
     if (rows is None or source.ndim != 2 or len(source) <= rows
             or source.shape[1] != model.n_features_in_):
-        return model.transfer(source)      # one block; the library checks the input
-    out = np.empty((len(source), int(model.n_features_out_)))
+        result = model.transfer(source)      # one block; the library checks the input
+        if out is None:
+            return result
+        out[...] = result
+        return out
+    if out is None:
+        out = np.empty((len(source), int(model.n_features_out_)))
     for start in range(0, len(source), rows):
         block = source[start:start + rows]
         finite = np.isfinite(block)
@@ -237,10 +243,11 @@ class ModelStore:
                 self._models[model_id] = (model, metadata)
         return model
 
-    def transfer(self, model_id, source, block_elements=None):
+    def transfer(self, model_id, source, block_elements=None, out=None):
         """Map source points through the model ``model_id``; an LPA model in blocks of about
-        ``block_elements`` points x clusters (:func:`transfer_in_blocks`)."""
-        return transfer_in_blocks(self.get(model_id), source, block_elements)
+        ``block_elements`` points x clusters, into ``out`` if given
+        (:func:`transfer_in_blocks`)."""
+        return transfer_in_blocks(self.get(model_id), source, block_elements, out)
 
     def describe(self, model_id):
         """Method, dimensions, number of local maps and correspondences, hyperparameters and
