@@ -12,18 +12,26 @@ Exits 0 when done (after the reliable subscribers acknowledged everything) or on
 a missing, unreadable or non-MCAP input, or no requested topic in the bag, is one FATAL line and
 exit 1.
 
+``clock`` > 0 publishes the playback time on ``/clock`` at that rate (Hz), like ``ros2 bag play
+--clock``: the log time of the bag at the current playback position (it advances with wall
+time times ``rate``), so nodes with ``use_sim_time:=true`` run on the recording's time.
+
 Parameters (input, rate, topics, loop, ...): docs/nodes.md.
 """
 import os
+import threading
 import time
 
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 import yaml
 
 from lpa_transfer.recording.bag import read_messages, summary
-from lpa_transfer_nodes._ros_util import (array_parameter, message_class, qos_from_offered,
-                                          run_job)
+from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
+                                          message_class, qos_from_offered, run_job, sim_stamp)
 
 
 def bag_topics(path):
@@ -43,16 +51,30 @@ class Player(Node):
     def __init__(self, stop):
         super().__init__("player")
         self.stop = stop
-        self.input = self.declare_parameter("input", "").value
+        self.input = declare(self, "input", "", "path of the .mcap bag to play (required)")
         if not self.input:
             raise ValueError("parameter 'input' (path of the .mcap file) is required")
-        self.rate = self.declare_parameter("rate", 1.0).value
-        self.loop = self.declare_parameter("loop", False).value
-        self.start_delay = self.declare_parameter("start_delay", 1.0).value
-        self.min_subscribers = self.declare_parameter("wait_for_subscribers", 1).value
-        self.wait_timeout = self.declare_parameter("wait_timeout", 10.0).value
-        depth = self.declare_parameter("qos_depth", 1000).value
-        wanted = array_parameter(self, "topics")
+        self.rate = declare(self, "rate", 1.0, "playback speed: 1 as recorded, 2 twice as "
+                            "fast; 0 as fast as possible", range=(0.0, None), finite=True)
+        self.loop = declare(self, "loop", False, "play the bag again and again until stopped")
+        self.start_delay = declare(self, "start_delay", 1.0, "seconds to wait before playing",
+                                   range=(0.0, None), finite=True)
+        self.min_subscribers = declare(self, "wait_for_subscribers", 1,
+                                       "subscribers each played topic waits for (up to "
+                                       "wait_timeout) before playing; 0: do not wait",
+                                       range=(0, None))
+        self.wait_timeout = declare(self, "wait_timeout", 10.0,
+                                    "seconds to wait for subscribers, and for reliable "
+                                    "subscribers to acknowledge at the end",
+                                    range=(0.0, None), finite=True)
+        self.clock_rate = declare(self, "clock", 0.0,
+                                  "publish the playback time on /clock at this rate (Hz), "
+                                  "like ros2 bag play --clock; 0: no /clock",
+                                  range=(0.0, None), finite=True)
+        depth = declare(self, "qos_depth", 1000, "queue depth of each publisher", positive=True)
+        describe_use_sim_time(self)
+        wanted = declare_array(self, "topics", Parameter.Type.STRING_ARRAY,
+                               "topics to play; unset: every topic of the bag")
         topics = bag_topics(self.input)
         absent = [topic for topic in wanted if topic not in topics]
         if wanted and len(absent) == len(set(wanted)):
@@ -67,6 +89,20 @@ class Player(Node):
                 message_class(info.type_name), topic,
                 qos_from_offered(yaml.safe_load(info.offered_qos_profiles or "[]") or [], depth))
             for topic, info in self.topic_info.items()}
+        if self.clock_rate > 0 and "/clock" in self.publishers_by_topic:
+            self.get_logger().warning("the bag holds /clock and clock > 0: both are played on "
+                                      "/clock; set topics to leave the recorded one out")
+        self.clock_pub = (self.create_publisher(Clock, "/clock", QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)) if self.clock_rate > 0 else None)
+        self.playback = None   # (wall start, log-time start) of the pass being played
+
+    def publish_clock(self):
+        """Publish the bag time at the playback position every 1/clock s until stopped."""
+        while not self.stop.wait(1.0 / self.clock_rate) and not self.finished.is_set():
+            if self.playback is not None:
+                start_wall, start_log = self.playback
+                now_ns = start_log + int((time.monotonic() - start_wall) * 1e9 * max(self.rate, 0))
+                self.clock_pub.publish(Clock(clock=sim_stamp(now_ns * 1e-9)))
 
     def sleep(self, seconds):
         """Sleep unless stopped; returns False if stopped."""
@@ -88,11 +124,15 @@ class Player(Node):
         for message in read_messages(self.input, topics=list(self.topic_info)):
             if self.stop.is_set():
                 break
+            if start_log is None:
+                start_log = message.log_time_ns
+                self.playback = (start_wall, start_log)
             if self.rate > 0:
-                start_log = message.log_time_ns if start_log is None else start_log
                 due = start_wall + (message.log_time_ns - start_log) * 1e-9 / self.rate
                 if not self.sleep(due - time.monotonic()):
                     break
+            elif self.clock_pub is not None:     # as fast as possible: the clock jumps along
+                self.playback = (time.monotonic(), message.log_time_ns)
             self.publishers_by_topic[message.topic].publish(message.data)
             published[message.topic] += 1
         return published
@@ -102,6 +142,15 @@ class Player(Node):
             return
         if self.min_subscribers > 0:
             self.wait_for_subscribers()
+        self.finished = threading.Event()
+        if self.clock_pub is not None:
+            threading.Thread(target=self.publish_clock, daemon=True).start()
+        try:
+            self.play_passes()
+        finally:
+            self.finished.set()
+
+    def play_passes(self):
         while True:
             published = self.play_once()
             self.get_logger().info(f"published {sum(published.values())} messages from "
@@ -113,6 +162,7 @@ class Player(Node):
                 self.get_logger().warning(f"published to no subscriber on: {unheard}")
             if not self.loop or self.stop.is_set():
                 break
+        self.finished.set()          # the clock ends with the bag
         for publisher in self.publishers_by_topic.values():
             if not publisher.wait_for_all_acked(Duration(seconds=self.wait_timeout)):
                 self.get_logger().warning(f"{publisher.topic_name}: not all messages acknowledged")

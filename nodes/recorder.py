@@ -3,7 +3,11 @@
 Run: ``recorder --ros-args -p output:=run.mcap`` (or
 ``python -m lpa_transfer_nodes.recorder ...``).
 
-Subscriptions are raw (serialized CDR), written in the callback. On SIGINT/SIGTERM the node
+Subscriptions are raw (serialized CDR), written in the callback with rosbag2's times:
+``log_time`` the receive time on this node's ROS clock (wall time, or the simulated time with
+``use_sim_time:=true``), ``publish_time`` the publisher's send time from the middleware's
+message info (wall time). A message's own ``header.stamp`` stays in its payload. On
+SIGINT/SIGTERM the node
 stops discovery, drains messages still queued, closes the bag (readable, with summary), logs
 the per-topic counts and exits 0. An output it cannot create, or a write that fails (a full
 disk), is one FATAL line and exit 1; after a failed write it still tries to close the bag so
@@ -18,9 +22,11 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer.recording.bag import BagWriter, header_stamp_ns
-from lpa_transfer_nodes._ros_util import (init_with_stop_event, message_class, qos_from_offered,
-                                          qos_to_dict, array_parameter)
+from lpa_transfer.recording.bag import BagWriter
+from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
+                                          init_with_stop_event, message_class, qos_from_offered,
+                                          qos_to_dict)
+from rclpy.parameter import Parameter
 
 DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
 #: s: the longest a received message waits in memory before it is in the file (a SIGKILL
@@ -33,15 +39,27 @@ class Recorder(Node):
 
     def __init__(self):
         super().__init__("recorder")
-        output = self.declare_parameter("output", "").value
+        output = declare(self, "output", "", "path of the .mcap bag to write (required)")
         if not output:
             raise ValueError("parameter 'output' (path of the .mcap file) is required")
-        self.topics = set(array_parameter(self, "topics"))
-        regex = self.declare_parameter("topic_regex", "").value
-        self.topic_regex = re.compile(regex) if regex else None
-        self.exclude = set(array_parameter(self, "exclude") or DEFAULT_EXCLUDE)
-        self.qos_depth = self.declare_parameter("qos_depth", 1000).value
-        period = self.declare_parameter("discovery_period", 0.5).value
+        self.topics = set(declare_array(self, "topics", Parameter.Type.STRING_ARRAY,
+                                        "topics to record; unset: every topic discovered"))
+        regex = declare(self, "topic_regex", "", "record only topics this regular expression "
+                        "finds (re.search); empty: no filter")
+        try:
+            self.topic_regex = re.compile(regex) if regex else None
+        except re.error as exc:
+            raise ValueError(f"the parameter topic_regex must be a regular expression, got "
+                             f"{regex!r}: {exc}") from None
+        self.exclude = set(declare_array(self, "exclude", Parameter.Type.STRING_ARRAY,
+                                         f"topics never recorded; unset: {DEFAULT_EXCLUDE}")
+                           or DEFAULT_EXCLUDE)
+        self.qos_depth = declare(self, "qos_depth", 1000, "queue depth of each subscription",
+                                 positive=True)
+        period = declare(self, "discovery_period", 0.5,
+                         "how often (s) the graph is scanned for new topics", positive=True,
+                         finite=True)
+        describe_use_sim_time(self)
         try:
             self.bag = BagWriter(output, flush_period_s=FLUSH_PERIOD)
         except OSError as exc:
@@ -72,17 +90,18 @@ class Recorder(Node):
         self.bag.add_topic(topic, type_name, [qos_to_dict(qos) for qos in offered])
         self.create_subscription(
             message_class(type_name), topic,
-            lambda data, topic=topic, type_name=type_name: self.on_message(topic, type_name, data),
+            lambda data, info, topic=topic: self.on_message(topic, data, info),
             qos_from_offered(offered, self.qos_depth), raw=True)
         self.subscribed[topic] = type_name
         self.get_logger().info(f"subscribed to {topic} [{type_name}]")
 
-    def on_message(self, topic, type_name, data):
+    def on_message(self, topic, data, info):
+        """Write one message: log time = received now, publish time = sent (message info)."""
         if self.write_error is not None:
             return
         received_ns = self.get_clock().now().nanoseconds
         try:
-            self.bag.write(topic, data, received_ns, header_stamp_ns(type_name, data))
+            self.bag.write(topic, data, received_ns, info.get("source_timestamp") or None)
         except OSError as exc:
             self.write_error = exc
 

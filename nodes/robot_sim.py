@@ -14,7 +14,12 @@ machine can compute it.
 Free-running mode (``lockstep:=false``): a timer advances the simulation so that simulated
 time tracks wall time, with the latest command received on ``joint_commands``.
 
-Both modes publish ``joint_states`` and ``end_effector`` after each advance. Bad requests are
+Both modes publish ``joint_states`` and ``end_effector`` after each advance, stamped with the
+simulated time, and that time as a ``rosgraph_msgs/Clock`` on ``clock_topic`` (default
+``clock``: ``/clock`` for a robot in the root namespace, ``/<ns>/clock`` for a robot in a
+namespace — two lock-step robots advance independently, so each has its own clock). A node
+that stamps this robot's data runs with ``use_sim_time:=true`` and ``-r /clock:=<that topic>``,
+so its ROS clock and the stamps agree; the scenarios do that. Bad requests are
 refused and bad commands ignored (logged); neither touches the simulation, and the node keeps
 serving.
 
@@ -25,6 +30,8 @@ import os
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
 from geometry_msgs.msg import Point, PointStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -67,6 +74,10 @@ class RobotSim(Node):
                                 "true: lock-step, the ~/step and ~/reset services advance the "
                                 "simulation; false: free-running, a timer advances it in wall "
                                 "time with the latest joint_commands")
+        clock_topic = declare(self, "clock_topic", "clock",
+                              "where the simulated time is published (rosgraph_msgs/Clock) "
+                              "after every advance; relative names resolve in the robot's "
+                              "namespace; empty: not published")
         describe_use_sim_time(self)
 
         if bool(robot) == bool(urdf):
@@ -82,6 +93,10 @@ class RobotSim(Node):
                                   seed=seed, position_gain=position_gain)
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
+        # like a simulator's /clock: best effort, only the latest time matters
+        self.clock_pub = (self.create_publisher(
+            Clock, clock_topic, QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+            if clock_topic else None)
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
@@ -113,6 +128,8 @@ class RobotSim(Node):
 
     def publish(self, state):
         joint_state = self.joint_state(state)
+        if self.clock_pub is not None:
+            self.clock_pub.publish(Clock(clock=joint_state.header.stamp))
         self.joint_state_pub.publish(joint_state)
         point = PointStamped()
         point.header.stamp, point.header.frame_id = joint_state.header.stamp, WORLD_FRAME

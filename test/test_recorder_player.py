@@ -54,6 +54,7 @@ def record(ros_node, tmp_path, stop_signal, joint_states=JOINT_STATES):
     try:
         wait_until(lambda: joints.get_subscription_count() and samples.get_subscription_count(),
                    what="the recorder's subscriptions")
+        record.window = [time.time_ns()]
         for i in range(joint_states):
             joints.publish(joint_state(i))
             if i % (joint_states // SAMPLES) == 0 and i // (joint_states // SAMPLES) < SAMPLES:
@@ -61,6 +62,7 @@ def record(ros_node, tmp_path, stop_signal, joint_states=JOINT_STATES):
             time.sleep(0.002)
         for publisher in (joints, samples):
             assert publisher.wait_for_all_acked(Duration(seconds=10))
+        record.window.append(time.time_ns())
     finally:
         assert recorder.stop(stop_signal) == 0, recorder.log()
     assert "closed" in recorder.log()
@@ -76,7 +78,14 @@ def test_recorder_keeps_every_message_on_sigint(ros_node, tmp_path):
     recorded = list(bag.read_messages(path, topics=["/joint_states"]))
     positions = [list(deserialize_message(m.data, JointState).position) for m in recorded]
     assert positions == [list(joint_state(i).position) for i in range(JOINT_STATES)]
-    assert [m.publish_time_ns for m in recorded] == [i * 10**9 + 1000 for i in range(JOINT_STATES)]
+    # rosbag2's times: publish = the publisher's send time, log = the recorder's receive
+    # time (both wall clock here), not the header stamps (i s + 1 µs), which stay in the data
+    sent = [m.publish_time_ns for m in recorded]
+    start, end = record.window
+    assert sent == sorted(sent) and start <= sent[0] and sent[-1] <= end
+    assert all(0 <= m.log_time_ns - m.publish_time_ns < 10**9 for m in recorded)
+    stamps = [deserialize_message(m.data, JointState).header.stamp for m in recorded]
+    assert [(s.sec, s.nanosec) for s in stamps] == [(i, 1000) for i in range(JOINT_STATES)]
 
 
 def test_recorder_finalises_on_sigterm(ros_node, tmp_path):
@@ -110,6 +119,38 @@ def test_player_replays_samples_in_order(ros_node, tmp_path):
         assert player.stop() == 0, player.log()
     assert [(m.index, list(m.source), list(m.target)) for m in received] == [
         (s.index, list(s.source), list(s.target)) for s in map(sample, range(SAMPLES))], player.log()
+
+
+def test_player_publishes_the_bag_time_on_clock(ros_node, tmp_path):
+    """clock:=50 publishes the playback position in the bag's log time on /clock (as ros2
+    bag play --clock): increasing, within the bag's span."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+
+    path, first = tmp_path / "timed.mcap", 5 * 10**9
+    with bag.BagWriter(path) as writer:
+        writer.add_topic("/samples", "lpa_transfer_interfaces/msg/CorrespondenceSample")
+        for i in range(SAMPLES):     # 40 messages over 1 s of bag time
+            writer.write("/samples", serialize_message(sample(i)), first + i * 25_000_000)
+    domain_id = unique_domain_id()
+    test = ros_node(domain_id)
+    clocks, received = [], []
+    test.node.create_subscription(Clock, "/clock", clocks.append, QoSProfile(
+        depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
+    test.node.create_subscription(CorrespondenceSample, "/samples", received.append, RELIABLE_1000)
+    player = NodeProcess("player", domain_id, tmp_path / "log_play", ros_params(
+        input=path, rate=1.0, clock=50.0))
+    try:
+        test.spin_until(lambda: not player.alive(), timeout=20, what="the player to finish")
+        test.spin_for(0.2)
+    finally:
+        assert player.stop() == 0, player.log()
+    times = [c.clock.sec * 10**9 + c.clock.nanosec for c in clocks]
+    assert len(received) == SAMPLES
+    assert len(times) >= 20, times           # 1 s at 50 Hz, less what discovery took
+    assert times == sorted(times)
+    assert first <= times[0] and times[-1] <= first + 1_100_000_000
+    assert times[-1] - times[0] >= 500_000_000
 
 
 def written_bag(path):

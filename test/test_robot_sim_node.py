@@ -97,6 +97,32 @@ def test_joint_states_are_published_with_sim_time_stamps(sim):
     assert len(last.effort) == 2 and all(math.isfinite(e) for e in last.effort)
 
 
+def test_clock_carries_the_simulated_time_to_a_node_on_sim_time(sim):
+    """/clock (the robot is in the root namespace) is the time of the last advance, and a node
+    with use_sim_time reads it as its ROS clock: its clock and the stamps agree."""
+    from rclpy.parameter import Parameter
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosgraph_msgs.msg import Clock
+
+    node, client = sim
+    clocks = []
+    client.node.create_subscription(Clock, "/clock", clocks.append, QoSProfile(
+        depth=10, reliability=ReliabilityPolicy.BEST_EFFORT))
+    client.node.set_parameters([Parameter("use_sim_time", value=True)])
+    for _ in range(50):          # until discovery lets the clock through
+        assert client.step([0.2, 0.1], 10).success
+        client.executor.spin_once(timeout_sec=0.05)
+        if clocks:
+            break
+    response = client.step([0.2, 0.1], 10)
+    client.spin_until(lambda: clocks and stamp_seconds(clocks[-1].clock) >= response.sim_time)
+    assert stamp_seconds(clocks[-1].clock) == pytest.approx(response.sim_time, abs=1e-9)
+    assert client.node.get_clock().now().nanoseconds == pytest.approx(
+        response.sim_time * 1e9, abs=1)
+    assert client.node.get_clock().now().to_msg() == response.joint_state.header.stamp
+    client.node.set_parameters([Parameter("use_sim_time", value=False)])
+
+
 @pytest.mark.parametrize("command, message", [([0.1], "must have 2 values"),
                                               ([0.1, 0.2, 0.3], "must have 2 values"),
                                               ([math.nan, 0.1], "NaN or infinite"),
