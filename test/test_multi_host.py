@@ -68,7 +68,7 @@ def test_three_hosts_give_the_one_host_results_and_record_every_topic(tmp_path, 
 
 def test_a_robots_host_link_down_for_2_s_is_ridden_out(tmp_path, one_host):
     out = tmp_path / "run"
-    result = multi_host(out, "--link-down", "rob", "0.5", "2")
+    result = multi_host(out, "--link-down", "rob", "0.2", "2")
     assert "fault: host rob link down for 2 s" in result.stderr
     assert "fault: host rob link up again" in result.stderr
     same_results(out, one_host)

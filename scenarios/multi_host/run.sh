@@ -7,8 +7,9 @@
 # Usage (as root): scenarios/multi_host/run.sh [--link-down HOST AFTER SECONDS]
 #                  [two_link_graph run.sh arguments...]
 #   e.g. --config scenarios/two_link_graph/smoke.yaml --out runs/multi_host
-#   --link-down rob 1.5 2: the robots host's link goes down 1.5 s after the collection step
-#   started, for 2 s (a fault; hosts: rob, map, lrn). Leaves topology.txt in the run directory: each host's
+#   --link-down rob 0.2 2: the robots host's link goes down 0.2 s after the collector logged
+#   that it started babbling (discovery is done by then: the fault lands mid-collection), for
+#   2 s (a fault; hosts: rob, map, lrn). Leaves topology.txt in the run directory: each host's
 #   routes, this machine's own links, and the bytes each bridge port carried.
 # Without root or network namespaces it says so in one line and exits 77 (skip).
 #
@@ -72,7 +73,7 @@ print(os.path.realpath(args[args.index("--out") + 1]) if "--out" in args
 PY
 )
 if [ ${#LINK_DOWN[@]} = 3 ]; then
-    (until [ -e "$OUT/logs/correspondence_collector.log" ]; do sleep 0.1; done
+    (until grep -qs babbling "$OUT/logs/correspondence_collector.log"; do sleep 0.02; done
      sleep "${LINK_DOWN[1]}"; ip -n "$PREFIX${LINK_DOWN[0]}" link set eth0 down
      echo "[$(date +%T)] fault: host ${LINK_DOWN[0]} link down for ${LINK_DOWN[2]} s" >&2
      sleep "${LINK_DOWN[2]}"; ip -n "$PREFIX${LINK_DOWN[0]}" link set eth0 up
