@@ -28,10 +28,12 @@ start lpa_mapping lpa_mapping "${PARAMS[@]}" -p "model_dir:=$OUT/models"
 for side in source target; do
     start "${side}_sim" robot_sim "${PARAMS[@]}" -r "__ns:=/$side"
 done
-start source_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/source -r __node:=learner
-start target_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target -r __node:=learner
+start source_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/source -r __node:=learner \
+    $(sim_time source)
+start target_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target -r __node:=learner \
+    $(sim_time target)
 start target_guarded_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target \
-    -r __node:=guarded_learner
+    -r __node:=guarded_learner $(sim_time target)
 PAIRS=()
 for seed in $SEEDS; do   # guided exploration with the target's babbling seed of this run
     target_seed=$(python -c "from lpa_transfer.goal_babbling.experiment import derived_seeds

@@ -30,7 +30,7 @@ for robot in $(experiment_list robots); do
     start "${robot}_sim" robot_sim "${PARAMS[@]}" -r "__ns:=/$robot"
     for star in $STARS; do
         start "${robot}_${star}" inverse_dynamics_learner "${PARAMS[@]}" -r "__ns:=/$robot" \
-            -r "__node:=$star"
+            -r "__node:=$star" $(sim_time "$robot")
     done
 done
 PAIRS=()

@@ -20,7 +20,8 @@ start recorder recorder "${PARAMS[@]}" -p "output:=$OUT/run.mcap"
 start lpa_mapping lpa_mapping "${PARAMS[@]}" -p "model_dir:=$OUT/models"
 for robot in pr2_right_arm meka_right_arm; do
     start "${robot}_sim" robot_sim "${PARAMS[@]}" -r "__ns:=/$robot"
-    start "${robot}_skill_learner" skill_learner "${PARAMS[@]}" -r "__ns:=/$robot"
+    start "${robot}_skill_learner" skill_learner "${PARAMS[@]}" -r "__ns:=/$robot" \
+        $(sim_time "$robot")
 done
 start demonstration_source demonstration_source "${PARAMS[@]}"
 step experiment python "$HERE/run_experiment.py" "${PARAMS[@]}" -p "output_dir:=$OUT"

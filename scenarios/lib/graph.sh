@@ -53,6 +53,11 @@ on_host() {   # on_host NAME: the command prefix that puts NAME on its host ('' 
         if [ "${entry%%=*}" = "$1" ]; then echo "ip netns exec ${entry#*=} env ${LPA_HOST_ENV:-}"; return; fi
     done
 }
+# sim_time NAMESPACE: the arguments that put a node on the simulated clock of the robot in
+# NAMESPACE (its robot_sim publishes /NAMESPACE/clock), so the node's clock and the header
+# stamps of that robot's data agree. Lock-step nodes still take each state's time from the
+# StepRobot answer, which is exact; the clock is for logs, tools and users' nodes.
+sim_time() { echo "-p use_sim_time:=true -r /clock:=/$1/clock"; }
 start() {   # start NAME MODULE ARGS...: a node in the background, its output in logs/NAME.log
     local name=$1 module=$2; shift 2
     setsid $(on_host "$name") python -m "lpa_transfer_nodes.$module" "$@" >"$OUT/logs/$name.log" 2>&1 &
