@@ -39,6 +39,9 @@ FastExecutor = EventsExecutor
 SAMPLE_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 BATCH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: /clock (rosgraph_msgs/Clock) from robot_sim and the player: what rclpy's TimeSource
+#: subscribes with (best effort, only the latest time matters).
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 def to_matrix(values):

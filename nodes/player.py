@@ -25,13 +25,12 @@ import time
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 import yaml
 
 from lpa_transfer.recording.bag import read_messages, summary
-from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
-                                          message_class, qos_from_offered, run_job, sim_stamp)
+from lpa_transfer_nodes._ros_util import (CLOCK_QOS, declare, declare_array,
+                                          describe_use_sim_time, message_class, qos_from_offered, run_job, sim_stamp)
 
 
 def bag_topics(path):
@@ -92,16 +91,17 @@ class Player(Node):
         if self.clock_rate > 0 and "/clock" in self.publishers_by_topic:
             self.get_logger().warning("the bag holds /clock and clock > 0: both are played on "
                                       "/clock; set topics to leave the recorded one out")
-        self.clock_pub = (self.create_publisher(Clock, "/clock", QoSProfile(
-            depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)) if self.clock_rate > 0 else None)
+        self.clock_pub = (self.create_publisher(Clock, "/clock", CLOCK_QOS)
+                          if self.clock_rate > 0 else None)
         self.playback = None   # (wall start, log-time start) of the pass being played
+        self.finished = threading.Event()   # set when the last pass ends: the clock stops
 
     def publish_clock(self):
         """Publish the bag time at the playback position every 1/clock s until stopped."""
         while not self.stop.wait(1.0 / self.clock_rate) and not self.finished.is_set():
             if self.playback is not None:
                 start_wall, start_log = self.playback
-                now_ns = start_log + int((time.monotonic() - start_wall) * 1e9 * max(self.rate, 0))
+                now_ns = start_log + int((time.monotonic() - start_wall) * 1e9 * self.rate)
                 self.clock_pub.publish(Clock(clock=sim_stamp(now_ns * 1e-9)))
 
     def sleep(self, seconds):
@@ -142,7 +142,6 @@ class Player(Node):
             return
         if self.min_subscribers > 0:
             self.wait_for_subscribers()
-        self.finished = threading.Event()
         if self.clock_pub is not None:
             threading.Thread(target=self.publish_clock, daemon=True).start()
         try:

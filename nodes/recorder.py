@@ -21,12 +21,12 @@ import time
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
 from lpa_transfer.recording.bag import BagWriter
 from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
                                           init_with_stop_event, message_class, qos_from_offered,
                                           qos_to_dict)
-from rclpy.parameter import Parameter
 
 DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
 #: s: the longest a received message waits in memory before it is in the file (a SIGKILL

@@ -30,7 +30,6 @@ import os
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from geometry_msgs.msg import Point, PointStamped
 from sensor_msgs.msg import JointState
@@ -39,8 +38,9 @@ from std_msgs.msg import Float64MultiArray
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (FastExecutor, answering, declare, declare_array,
-                                          describe_use_sim_time, serve, sim_stamp)
+from lpa_transfer_nodes._ros_util import (CLOCK_QOS, FastExecutor, answering, declare,
+                                          declare_array, describe_use_sim_time, serve,
+                                          sim_stamp)
 
 WORLD_FRAME = "world"
 
@@ -93,10 +93,8 @@ class RobotSim(Node):
                                   seed=seed, position_gain=position_gain)
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
-        # like a simulator's /clock: best effort, only the latest time matters
-        self.clock_pub = (self.create_publisher(
-            Clock, clock_topic, QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
-            if clock_topic else None)
+        self.clock_pub = (self.create_publisher(Clock, clock_topic, CLOCK_QOS)
+                          if clock_topic else None)
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
