@@ -76,17 +76,21 @@ class Recorder(Node):
                 and (self.topic_regex is None or self.topic_regex.search(topic)))
 
     def discover(self):
-        """Subscribe to matching topics that appeared since the last scan."""
+        """Subscribe to matching topics that have a publisher since the last scan. A topic
+        seen only through its subscribers waits for a later scan, as in rosbag2: its QoS is
+        not known yet, and a reliable guess would never match a best-effort publisher (the
+        /<robot>/clock of a learner that started before its robot_sim)."""
         for topic, type_names in self.get_topic_names_and_types():
             if topic in self.subscribed or not self.wanted(topic):
                 continue
             if len(type_names) != 1:
                 self.get_logger().warning(f"skipping {topic}: several types {type_names}")
                 continue
-            self.subscribe(topic, type_names[0])
+            offered = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
+            if offered:
+                self.subscribe(topic, type_names[0], offered)
 
-    def subscribe(self, topic, type_name):
-        offered = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
+    def subscribe(self, topic, type_name, offered):
         self.bag.add_topic(topic, type_name, [qos_to_dict(qos) for qos in offered])
         self.create_subscription(
             message_class(type_name), topic,

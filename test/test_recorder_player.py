@@ -9,8 +9,10 @@ from lpa_transfer_nodes.testing import (ClientNode, NodeProcess, ros_params, run
                                        unique_domain_id, wait_until)
 
 from rclpy.duration import Duration
-from rclpy.qos import QoSProfile
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
+from builtin_interfaces.msg import Time
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from lpa_transfer_interfaces.msg import CorrespondenceSample
@@ -88,6 +90,32 @@ def test_recorder_keeps_every_message_on_sigint(ros_node, tmp_path):
     assert [(s.sec, s.nanosec) for s in stamps] == [(i, 1000) for i in range(JOINT_STATES)]
 
 
+def test_a_topic_seen_first_through_a_subscriber_is_recorded_from_its_best_effort_publisher(
+        ros_node, tmp_path):
+    """A node on sim time subscribes to its robot's /clock before the robot publishes it
+    (best effort): the recorder must subscribe with the publisher's QoS, not a guess."""
+    domain_id, output = unique_domain_id(), tmp_path / "run.mcap"
+    test = ros_node(domain_id)
+    best_effort = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+    test.node.create_subscription(Clock, "/robot/clock", lambda msg: None, best_effort)
+    recorder = NodeProcess("recorder", domain_id, tmp_path / "log",
+                           ros_params(output=output, discovery_period=0.2))
+    try:
+        wait_until(lambda: "recording to" in recorder.log(), what="the recorder's start")
+        time.sleep(1.0)                              # scans that see only the subscriber
+        clock = test.node.create_publisher(Clock, "/robot/clock", best_effort)
+        wait_until(lambda: clock.get_subscription_count() == 2,
+                   what="the recorder's subscription to /robot/clock")
+        for i in range(20):
+            clock.publish(Clock(clock=Time(sec=i)))
+            time.sleep(0.01)
+        time.sleep(0.5)
+    finally:
+        assert recorder.stop(signal.SIGINT) == 0, recorder.log()
+    recorded = list(bag.read_messages(output, topics=["/robot/clock"]))
+    assert [deserialize_message(m.data, Clock).clock.sec for m in recorded] == list(range(20))
+
+
 def test_recorder_finalises_on_sigterm(ros_node, tmp_path):
     path = record(ros_node, tmp_path, signal.SIGTERM, joint_states=80)
     assert bag.summary(path)["/joint_states"].message_count == 80
@@ -124,9 +152,6 @@ def test_player_replays_samples_in_order(ros_node, tmp_path):
 def test_player_publishes_the_bag_time_on_clock(ros_node, tmp_path):
     """clock:=50 publishes the playback position in the bag's log time on /clock (as ros2
     bag play --clock): increasing, within the bag's span."""
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from rosgraph_msgs.msg import Clock
-
     path, first = tmp_path / "timed.mcap", 5 * 10**9
     with bag.BagWriter(path) as writer:
         writer.add_topic("/samples", "lpa_transfer_interfaces/msg/CorrespondenceSample")
