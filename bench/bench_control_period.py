@@ -11,7 +11,7 @@ learner on the same start, and prints the wall time per period and per simulated
    bookkeeping) with a dummy regressor.
 
 Usage (repository root, after ``source tools/env.sh``): ``python -m bench.bench_control_period
-[--trials N]``; it starts and stops its own robot_sim on a private ROS domain.
+[--trials N] [--no-tf]``; it starts and stops its own robot_sim on a private ROS domain.
 """
 import argparse
 import json
@@ -79,6 +79,8 @@ def run(step, start_state, learner, trajectory, n_trials):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--trials", type=int, default=2)
+    parser.add_argument("--no-tf", action="store_true",
+                        help="robot_sim without its /tf (publish_tf false): what TF costs")
     args = parser.parse_args()
     robot, sim_params, learner, home, trajectory, hyper = settings()
     rows = []
@@ -120,7 +122,7 @@ def main():
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     with tempfile.TemporaryDirectory() as logs:
         params = ros_params(robot=str(ROOT / sim_params["robot"]), control_mode="torque",
-                            physics_step=0.001)
+                            physics_step=0.001, publish_tf=not args.no_tf)
         node_args = params + ["-p", "initial_positions:=" + str([float(q) for q in home])]
         with NodeProcess("robot_sim", domain_id, logs, node_args):
             rclpy.init()

@@ -42,6 +42,12 @@ BATCH_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 #: /clock (rosgraph_msgs/Clock) from robot_sim and the player: what rclpy's TimeSource
 #: subscribes with (best effort, only the latest time matters).
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
+#: robot_description and /tf_static: latched (reliable, transient local, depth 1), as
+#: robot_state_publisher and tf2's static broadcaster offer them.
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: /tf: as tf2's TransformBroadcaster offers it (reliable, volatile, depth 100).
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 
 
 def to_matrix(values):

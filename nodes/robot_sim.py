@@ -14,8 +14,10 @@ machine can compute it.
 Free-running mode (``lockstep:=false``): a timer advances the simulation so that simulated
 time tracks wall time, with the latest command received on ``joint_commands``.
 
-Both modes publish ``joint_states`` and ``end_effector`` after each advance, stamped with the
-simulated time, and that time as a ``rosgraph_msgs/Clock`` on ``clock_topic`` (default
+Both modes publish ``joint_states``, ``end_effector`` and the link frames on ``/tf`` (frames
+``<frame_prefix><link>``, the base fixed to ``world`` on ``/tf_static``) after each advance,
+stamped with the simulated time; the URDF goes out once, latched, on ``robot_description``
+(std_msgs/String), so Foxglove's 3-D panel or RViz draws the robot as simulated. And the time, and that time as a ``rosgraph_msgs/Clock`` on ``clock_topic`` (default
 ``clock``: ``/clock`` for a robot in the root namespace, ``/<ns>/clock`` for a robot in a
 namespace — two lock-step robots advance independently, so each has its own clock). A node
 that stamps this robot's data runs with ``use_sim_time:=true`` and ``-r /clock:=<that topic>``,
@@ -27,18 +29,20 @@ Parameters, topics and services: docs/nodes.md.
 """
 import math
 import os
+from pathlib import Path
 
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
-from geometry_msgs.msg import Point, PointStamped
+from geometry_msgs.msg import Point, PointStamped, TransformStamped
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, String
+from tf2_msgs.msg import TFMessage
 
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (CLOCK_QOS, FastExecutor, answering, declare,
+from lpa_transfer_nodes._ros_util import (CLOCK_QOS, LATCHED_QOS, TF_QOS, FastExecutor, answering, declare,
                                           declare_array, describe_use_sim_time, serve,
                                           sim_stamp)
 
@@ -78,6 +82,16 @@ class RobotSim(Node):
                               "where the simulated time is published (rosgraph_msgs/Clock) "
                               "after every advance; relative names resolve in the robot's "
                               "namespace; empty: not published")
+        namespace = self.get_namespace().strip("/")
+        self.frame_prefix = declare(self, "frame_prefix", f"{namespace}/" if namespace else "",
+                                    "prefix of the TF frame names of this robot's links (as "
+                                    "robot_state_publisher's frame_prefix), so that robots "
+                                    "sharing /tf keep their frames apart; default: the node's "
+                                    "namespace without its leading '/', then '/' (empty in "
+                                    "the root namespace)")
+        publish_tf = declare(self, "publish_tf", True,
+                             "publish the link frames on /tf after every advance (and the "
+                             "world -> base link transform on /tf_static)")
         describe_use_sim_time(self)
 
         if bool(robot) == bool(urdf):
@@ -86,7 +100,7 @@ class RobotSim(Node):
         if robot:
             description = robot_urdf(load_robot_params(os.path.expanduser(robot)))
         else:
-            description = os.path.expanduser(urdf)
+            description = Path(os.path.expanduser(urdf)).read_text()
         self.initial = initial
         self.sim = RobotSimulator(description, control_mode=control_mode,
                                   physics_step=physics_step, initial_positions=initial,
@@ -95,6 +109,15 @@ class RobotSim(Node):
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
         self.clock_pub = (self.create_publisher(Clock, clock_topic, CLOCK_QOS)
                           if clock_topic else None)
+        # The URDF, latched, as robot_state_publisher offers it; Foxglove's 3-D panel draws it
+        # with the TF frames below (docs/nodes.md).
+        self.create_publisher(String, "robot_description", LATCHED_QOS).publish(
+            String(data=description))
+        # /tf only while someone listens (a lock-step period costs less without it)
+        self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if publish_tf else None
+        self.tf_static_pub = (self.create_publisher(TFMessage, "/tf_static", LATCHED_QOS)
+                              if publish_tf else None)
+        self._tf = self._tf_base = None
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
@@ -124,10 +147,38 @@ class RobotSim(Node):
             for values in (state.positions, state.velocities, state.efforts))
         return msg
 
+    def tf_messages(self, stamp):
+        """The robot's link frames (:meth:`RobotSimulator.link_frames`) at ``stamp``: the
+        world -> base link TransformStamped and a TFMessage of every link relative to its
+        parent. The messages are made once and updated in place, which costs less than new
+        ones at every lock-step period (bench/bench_control_period.py --no-tf)."""
+        frames = self.sim.link_frames()
+        if self._tf is None:
+            def transform(parent, child):
+                msg = TransformStamped(child_frame_id=self.frame_prefix + child)
+                msg.header.frame_id = WORLD_FRAME if parent is None else self.frame_prefix + parent
+                return msg
+            self._tf_base = transform(*frames[0][:2])
+            self._tf = TFMessage(transforms=[transform(*frame[:2]) for frame in frames[1:]])
+        for msg, (_, _, translation, rotation) in zip([self._tf_base, *self._tf.transforms],
+                                                      frames):
+            msg.header.stamp = stamp
+            vector, quaternion = msg.transform.translation, msg.transform.rotation
+            vector.x, vector.y, vector.z = (float(v) for v in translation)
+            quaternion.x, quaternion.y, quaternion.z, quaternion.w = (float(v) for v in rotation)
+        return self._tf_base, self._tf
+
     def publish(self, state):
         joint_state = self.joint_state(state)
         if self.clock_pub is not None:
             self.clock_pub.publish(Clock(clock=joint_state.header.stamp))
+        if self.tf_pub is not None and (self.tf_static_pub is not None
+                                        or self.tf_pub.get_subscription_count()):
+            base, links = self.tf_messages(joint_state.header.stamp)
+            if self.tf_static_pub is not None:   # the base is fixed to the world: latched, once
+                self.tf_static_pub.publish(TFMessage(transforms=[base]))
+                self.tf_static_pub = None
+            self.tf_pub.publish(links)
         self.joint_state_pub.publish(joint_state)
         point = PointStamped()
         point.header.stamp, point.header.frame_id = joint_state.header.stamp, WORLD_FRAME

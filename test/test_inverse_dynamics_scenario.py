@@ -4,19 +4,25 @@ experiment step took 290 s beside two other experiments on the 2 cores, hence th
 youBot <-> Pincher (config.yaml), and youBot <-> 2-link arm (5 and 2 joints)."""
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
 
 from conftest import ROOT
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+from tf_tree import world_poses
 from lpa_transfer.inverse_dynamics.report import merge
 from lpa_transfer.recording.bag import summary
+from lpa_transfer.recording.scene import render
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.serial_chain import forward_kinematics
 from lpa_transfer_nodes.testing import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 pytestmark = pytest.mark.timeout(600)   # over setup.cfg's 300 s: each run takes minutes
+ROBOTS = ("youbot", "pincher")
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")
 
@@ -78,6 +84,48 @@ def test_outputs_and_bag(smoke_run):
     assert offsets[:, :2].max() < 0.18 and offsets[:, :2].max() > 0.05
     models = sorted(p.name for p in (smoke_run / "models").iterdir())
     assert len(models) == 4
+
+
+def test_the_bag_shows_each_robot_to_an_independent_reader(smoke_run):
+    """Issue 28: the scenario's bag (the demo's graph) read with rosbags' own Jazzy types has
+    each robot's simulated clock, its URDF and, at its last state, a complete transform tree
+    from the world to every link of that URDF, whose last link is where end_effector says."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    wanted = {f"/{robot}/{topic}" for robot in ROBOTS
+              for topic in ("clock", "robot_description", "end_effector")} | {"/tf", "/tf_static"}
+    messages = {topic: [] for topic in wanted}
+    with Reader(smoke_run / "run.mcap") as reader:
+        connections = [c for c in reader.connections if c.topic in wanted]
+        for connection, _, raw in reader.messages(connections=connections):
+            messages[connection.topic].append(store.deserialize_cdr(raw, connection.msgtype))
+    static = [t for m in messages["/tf_static"] for t in m.transforms]
+    for robot in ROBOTS:
+        clock = [m.clock.sec + 1e-9 * m.clock.nanosec for m in messages[f"/{robot}/clock"]]
+        assert len(clock) > 1000 and clock == sorted(clock), robot
+        description = messages[f"/{robot}/robot_description"][-1].data
+        frames = {"world"} | {f"{robot}/{link}"
+                              for link in re.findall(r'<link name="([^"]+)"', description)}
+        last = [m for m in messages["/tf"] if m.transforms[0].child_frame_id.startswith(robot)][-1]
+        world = world_poses([t for t in static if t.child_frame_id.startswith(robot)]
+                            + list(last.transforms))
+        assert set(world) == frames, robot
+        stamp = last.transforms[0].header.stamp
+        point = next(m.point for m in reversed(messages[f"/{robot}/end_effector"])
+                     if m.header.stamp == stamp)
+        tip = world[last.transforms[-1].child_frame_id][:3, 3]
+        assert np.allclose(tip, (point.x, point.y, point.z), atol=1e-6), robot
+    # the project's own picture of it (lpa_transfer.recording.scene) chains the same poses
+    scene = render(smoke_run / "run.mcap", smoke_run / "robots.png")
+    assert sorted(scene) == sorted(ROBOTS) and (smoke_run / "robots.png").stat().st_size > 10_000
+    for robot in ROBOTS:
+        frames = scene[robot]["frames"]
+        ours = {f: pose[:3, 3] for f, (_, pose) in frames.items()}
+        last = [m for m in messages["/tf"] if m.transforms[0].child_frame_id.startswith(robot)][-1]
+        theirs = world_poses([t for t in static if t.child_frame_id.startswith(robot)]
+                             + list(last.transforms))
+        assert set(ours) == set(theirs)
+        assert all(np.allclose(ours[f], theirs[f][:3, 3], atol=1e-12) for f in ours), robot
+        assert len(scene[robot]["trail"]) > 100
 
 
 def test_a_run_of_one_condition_repeats_the_full_runs_curves(smoke_run, tmp_path):

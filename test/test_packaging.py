@@ -12,7 +12,8 @@ KEYS = {"numpy": "python3-numpy", "scipy": "python3-scipy", "sklearn": "python3-
         "movement_primitives": "python3-movement-primitives-pip", "rclpy": "rclpy",
         "std_msgs": "std_msgs", "sensor_msgs": "sensor_msgs", "geometry_msgs": "geometry_msgs",
         "builtin_interfaces": "builtin_interfaces", "rcl_interfaces": "rcl_interfaces",
-        "rosgraph_msgs": "rosgraph_msgs",
+        "rosgraph_msgs": "rosgraph_msgs", "tf2_msgs": "tf2_msgs",
+        "mcap_ros2": "python3-mcap-ros2-support-pip",
         "lpa_transfer_interfaces": "lpa_transfer_interfaces",
         "zstandard": "python3-zstandard"}
 #: needed without an import of their own: what movement_primitives' dmp imports, and the

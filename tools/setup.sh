@@ -61,26 +61,31 @@ if grep -qs /opt/python/ "$VENV"/share/*/cmake/*__rosidl_generator_pyExport.cmak
     did_something=1
 fi
 
-# 5. The interface package, built against (and installed into) the venv prefix. Rebuilt when
-# its sources or the requirements change; the previous install is removed first so that a
-# deleted .msg does not linger.
+# 5. The interface packages, built against (and installed into) the venv prefix:
+# lpa_transfer_interfaces (msg_schemas/) and the standard tf2_msgs/TFMessage
+# (msg_schemas/tf2_msgs/: the ROS index has no tf2_msgs wheel). Rebuilt when their sources or
+# the requirements change; the previous install is removed first so that a deleted .msg does
+# not linger.
 msg_hash=$( (echo "$req_hash"; find msg_schemas -type f | sort | xargs sha256sum) | digest)
 if ! up_to_date msg_schemas "$msg_hash"; then
-    say "building msg_schemas/ (lpa_transfer_interfaces, about 30 s)"
-    log=$VENV/build/msg_schemas.log
-    mkdir -p "$BUILD"
-    [[ -f $BUILD/install_manifest.txt ]] && xargs rm -f <"$BUILD/install_manifest.txt"
-    if ! (
-        export VIRTUAL_ENV=$VENV PATH=$VENV/bin:$PATH AMENT_PREFIX_PATH=$VENV
-        cmake -S msg_schemas -B "$BUILD" -G Ninja -DCMAKE_INSTALL_PREFIX="$VENV" \
-            -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$VENV/bin/python"
-        cmake --build "$BUILD"
-        cmake --install "$BUILD"
-    ) >"$log" 2>&1; then
-        tail -n 40 "$log"
-        say "msg_schemas/ build failed; full log: $log"
-        exit 1
-    fi
+    for source in msg_schemas/tf2_msgs msg_schemas; do
+        build=$VENV/build/$(basename "$source")
+        say "building $source (about 30 s)"
+        log=$build.log
+        mkdir -p "$build"
+        [[ -f $build/install_manifest.txt ]] && xargs rm -f <"$build/install_manifest.txt"
+        if ! (
+            export VIRTUAL_ENV=$VENV PATH=$VENV/bin:$PATH AMENT_PREFIX_PATH=$VENV
+            cmake -S "$source" -B "$build" -G Ninja -DCMAKE_INSTALL_PREFIX="$VENV" \
+                -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DPython3_EXECUTABLE="$VENV/bin/python"
+            cmake --build "$build"
+            cmake --install "$build"
+        ) >"$log" 2>&1; then
+            tail -n 40 "$log"
+            say "$source build failed; full log: $log"
+            exit 1
+        fi
+    done
     mark_done msg_schemas "$msg_hash"
     did_something=1
 fi

@@ -278,7 +278,10 @@ def _check_summary_crc(stream, path):
 
 def _open_reader(stream, path):
     _check_summary_crc(stream, path)
-    reader = make_reader(stream, validate_crcs=True)
+    try:
+        reader = make_reader(stream, validate_crcs=True)
+    except _READ_ERRORS as error:
+        raise BagError(f"{path}: not an MCAP file ({type(error).__name__}: {error})") from None
     try:
         summary = reader.get_summary()
     except _READ_ERRORS as error:
@@ -341,6 +344,24 @@ def read_messages(path, topics=None, allow_truncated=False):
                      f"{last[1]} ns)" if last else "before its first message")
             raise BagError(f"{path}: corrupt data {where}, at byte {stream.tell()} of the "
                            f"file: {type(error).__name__}: {error}") from None
+
+
+def decoded_messages(path, topics=None):
+    """Yield ``(topic, log_time_ns, message)`` of a finished bag in log time order, each
+    message decoded from its CDR bytes by mcap_ros2 with the definition stored in the file
+    (attribute access as the ROS type's fields; no ROS install needed). Checked as
+    :func:`read_messages` checks."""
+    from mcap_ros2.decoder import DecoderFactory
+
+    with open(path, "rb") as stream:
+        _, info = _open_reader(stream, path)
+    schemas = {schema.name: schema for schema in info.schemas.values()}
+    factory, decoders = DecoderFactory(), {}
+    for message in read_messages(path, topics):
+        if message.type_name not in decoders:
+            decoders[message.type_name] = factory.decoder_for(MESSAGE_ENCODING,
+                                                              schemas[message.type_name])
+        yield message.topic, message.log_time_ns, decoders[message.type_name](message.data)
 
 
 def _read_truncated(stream, topics):

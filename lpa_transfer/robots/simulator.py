@@ -158,6 +158,12 @@ class RobotSimulator:
             raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
                              f"(<limit effort=...>); the simulator needs one to clip commands")
         self._ee_link = n_all - 1
+        # every link's name and its parent's (-1: the base), for link_frames()
+        self.base_link = p.getBodyInfo(self._body, physicsClientId=cid)[0].decode()
+        self.link_names = [info[12].decode() for info in infos]
+        self._link_parents = [info[16] for info in infos]
+        self._base_inertial = p.invertTransform(*p.getDynamicsInfo(
+            self._body, -1, physicsClientId=cid)[3:5])
         self.joint_damping = np.array([info[6] for info in movable], dtype=float)
         self.armature = self._armatures(urdf)
         for link in range(-1, n_all):
@@ -279,6 +285,28 @@ class RobotSimulator:
         for array in arrays:
             array.setflags(write=False)
         return SimState(self.time, *arrays)
+
+    def link_frames(self):
+        """Every link's frame relative to its parent's, as a URDF's joints chain them:
+        ``[(parent, child, translation (3,), quaternion (x, y, z, w)), ...]``, the base link
+        first, relative to the world frame ``None``. The frames are the URDF link frames (not
+        pybullet's centre-of-mass frames), so a URDF viewer fed these transforms (TF) draws
+        the robot as simulated."""
+        p, cid = self._p, self._client
+        base = p.multiplyTransforms(*p.getBasePositionAndOrientation(self._body,
+                                                                     physicsClientId=cid),
+                                    *self._base_inertial)
+        states = p.getLinkStates(self._body, list(range(len(self.link_names))),
+                                 computeForwardKinematics=True, physicsClientId=cid)
+        world = [(state[4], state[5]) for state in states]
+        frames = [(None, self.base_link, np.array(base[0]), np.array(base[1]))]
+        for child, parent in enumerate(self._link_parents):
+            parent_pose = base if parent < 0 else world[parent]
+            name = self.base_link if parent < 0 else self.link_names[parent]
+            relative = p.multiplyTransforms(*p.invertTransform(*parent_pose), *world[child])
+            frames.append((name, self.link_names[child], np.array(relative[0]),
+                           np.array(relative[1])))
+        return frames
 
     def close(self):
         """Disconnect the pybullet client (idempotent)."""

@@ -51,12 +51,15 @@ stop_all
 [ $FAILED = 0 ] || { echo "error: a node did not stop cleanly" >&2; exit 1; }
 WALL=$(python -c "import time; print(f'{time.time() - $START:.0f}')")
 python -m lpa_transfer.recording.bag "$OUT/run.mcap" >>"$OUT/report.txt"
+# the robots at their last state, drawn from the bag's robot_description and /tf
+python -m lpa_transfer.recording.scene "$OUT/run.mcap" "$OUT/robots.png" >/dev/null
 echo "whole run (nodes' start-up included): $WALL s of wall time" >>"$OUT/report.txt"
 if [ $PROGRESS = 1 ]; then   # the summary table went by; say where everything is
     echo "done in $WALL s. Written to $OUT:"
     echo "  figure  $OUT/fig5_7_5_8_learning_curves.png"
     echo "  report  $OUT/report.txt"
     echo "  bag     $OUT/run.mcap   (python -m lpa_transfer.recording.bag $OUT/run.mcap)"
+    echo "  robots  $OUT/robots.png   (from the bag's /tf; Foxglove: docs/nodes.md, robot_sim)"
     echo "  models  $OUT/models/   logs  $OUT/logs/"
 else
     cat "$OUT/report.txt"; echo "run directory: $OUT" >&2
