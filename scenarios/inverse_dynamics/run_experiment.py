@@ -50,6 +50,8 @@ from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.exploration.correspondences import load_correspondences  # noqa: E402
 from lpa_transfer.inverse_dynamics.analysis import CONDITIONS  # noqa: E402
+from lpa_transfer.inverse_dynamics.interpolation import (INTERPOLATIONS,  # noqa: E402
+                                                         interpolated)
 from lpa_transfer.inverse_dynamics.report import (SETTINGS, summary_lines,  # noqa: E402
                                                   write_outputs)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
@@ -89,6 +91,15 @@ class Experiment(Node):
         if not (np.isfinite(self.start_noise) and self.start_noise >= 0):
             raise ValueError(f"start_noise must be a finite angle >= 0 (rad), got "
                              f"{self.start_noise}")
+        # §5.4.1: 'spline' reads q̇, τ and q̈ off smoothing splines per babbling line (pairs)
+        # and per trial (the source's experience) before the fit and the transfer
+        # (lpa_transfer.inverse_dynamics.interpolation; reference_results/ablation, Factor 4)
+        self.interpolation = declare("interpolation", "none")
+        if self.interpolation not in INTERPOLATIONS:
+            raise ValueError(f"interpolation must be one of {INTERPOLATIONS}, got "
+                             f"{self.interpolation!r}")
+        self.line_samples = declare("babbling_line_samples", 60)   # /babbling/* samples_per_segment
+        self.control_period = 1.0 / declare("control_rate", 100.0)  # the learners' rate (Hz)
         self.output_dir = Path(declare("output_dir", "."))
         self.timeout = float(declare("call_timeout", 600.0))
         self.spinner = SingleThreadedExecutor()
@@ -161,9 +172,13 @@ class Experiment(Node):
             if self.start_noise > 0 or index == 0:   # else deterministic: the same every seed
                 for task in tasks:
                     scratch[task] = self.from_scratch(seed, *task, offsets[task])
-            sides = [load_correspondences(path)
-                     for path in pair_files[index * per_seed:(index + 1) * per_seed]]
-            pairs = {robot: np.vstack([side[k] for side in sides])
+            files = pair_files[index * per_seed:(index + 1) * per_seed]
+            if self.interpolation != "none":
+                self.check_whole_lines(files)
+            sides = [load_correspondences(path) for path in files]
+            pairs = {robot: interpolated(np.vstack([side[k] for side in sides]),
+                                         self.interpolation, self.line_samples,
+                                         self.control_period)
                      for k, robot in enumerate(self.robots)}
             methods = [m for m in ("pa", "lpa") if any(c.endswith(f"transfer-{m.upper()}")
                                                          for c in run)]
@@ -175,9 +190,12 @@ class Experiment(Node):
                     for method in ("PA", "LPA"):
                         if not {f"transfer-{method}", f"own+transfer-{method}"} & set(run):
                             continue
+                        experience = scratch[source, star][1]
                         transferred = self.transfer(
                             f"{source}->{target}/{method.lower()}/seed{seed}",
-                            scratch[source, star][1])
+                            interpolated(experience, self.interpolation,
+                                         len(experience) // self.n_source_trials,
+                                         self.control_period))
                         data[f"transfer-{method}"] = transferred
                         data[f"own+transfer-{method}"] = np.vstack(   # own babbling last
                             (transferred, pairs[target]))
@@ -195,6 +213,18 @@ class Experiment(Node):
                     curves[f"{robot}/{star}/uninitialised"].append(scratch[robot, star][0])
             write_outputs(curves, self.traces, self.reported(), self.output_dir)   # so far
         return curves
+
+    def check_whole_lines(self, files):
+        """Splines run per babbling line: refuse pair files whose rows are not whole lines
+        of ``babbling_line_samples`` (a dropped pair would shift every line after it)."""
+        for path in files:
+            with np.load(path) as data:
+                dropped = int(data["meta_pairs_dropped"]) if "meta_pairs_dropped" in data else 0
+                rows = len(data["source"])
+            if dropped or rows % self.line_samples:
+                raise ValueError(f"{path}: {rows} pairs, {dropped} dropped: not whole babbling "
+                                 f"lines of {self.line_samples} samples, which interpolation "
+                                 f"{self.interpolation!r} needs")
 
     def reported(self):
         """The settings the outputs describe: the target robots only (a source that only
