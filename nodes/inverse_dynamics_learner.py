@@ -29,42 +29,57 @@ from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.control import PID
 from lpa_transfer.robots.kinematics import home_pose
 from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
-                                                           make_regressor)
+                                                           make_regressor, regressors)
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.inverse_dynamics.tasks import star_task
+from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
-from lpa_transfer_nodes._ros_util import (RobotClients, answering, array_parameter,
-                                          call_service, from_matrix, robot_resetter,
-                                          robot_stepper, serve, sim_stamp, to_matrix,
-                                          wait_for_services)
+from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, declare,
+                                          declare_array, describe_use_sim_time, from_matrix,
+                                          robot_resetter, robot_stepper, serve, sim_stamp,
+                                          to_matrix, wait_for_services)
 
 
 class InverseDynamicsLearner(Node):
     def __init__(self, stop):
         super().__init__("inverse_dynamics_learner")
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
-        doubles = lambda name: array_parameter(self, name, Parameter.Type.DOUBLE_ARRAY)  # noqa: E731,E501
+        d = lambda *args, **kwargs: declare(self, *args, **kwargs)  # noqa: E731
+        doubles = lambda name, text: declare_array(  # noqa: E731
+            self, name, Parameter.Type.DOUBLE_ARRAY, text)
         self.stop = stop
-        self.robot = load_robot_params(os.path.expanduser(declare("robot", "")))
-        control_rate = float(declare("control_rate", 100.0))
-        physics_step = float(declare("physics_step", 0.001))
+        describe_use_sim_time(self)
+        self.robot = load_robot_params(os.path.expanduser(
+            d("robot", "", "the robot parameter file (scenarios/robots/*.toml; required)")))
+        control_rate = float(d("control_rate", 100.0, "control periods a second (Hz), up to "
+                               "1 / physics_step", positive=True, finite=True))
+        physics_step = float(d("physics_step", 0.001, "the simulator's physics step (s): each "
+                               "period advances round(1 / (control_rate * physics_step)) steps",
+                               positive=True, finite=True))
         if not 0 < control_rate <= 1.0 / physics_step:
-            raise ValueError(f"control_rate must be in (0, {1 / physics_step:g}] Hz, "
-                             f"got {control_rate}")
+            raise ValueError(f"the parameter control_rate must be in (0, {1 / physics_step:g}] "
+                             f"Hz (1 / physics_step), got {control_rate}")
         self.dt = 1.0 / control_rate
         self.n_steps = max(1, round(self.dt / physics_step))
-        pid = PID.from_gains(doubles("pid"))
-        self.trajectory = self.task(declare, doubles)
-        self.regressor_spec = (declare("regressor", "lwpr"),
-                               json.loads(declare("regressor_params", "{}")))
+        pid = PID.from_gains(doubles("pid", "[kp, ki, kd] of the feedback PID (required; "
+                                     "thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0])"))
+        self.trajectory = self.task(d, doubles)
+        self.regressor_spec = (
+            d("regressor", "lwpr", "the online learner of the feed-forward torque",
+              choices=sorted(regressors())),
+            json.loads(d("regressor_params", "{}", "JSON object of the regressor's "
+                         "hyperparameters, e.g. {\"init_D\": 30}; LWPR's norm_in defaults to "
+                         "the spread of the task's desired states")))
         if self.regressor_spec[0] == "lwpr":
             self.regressor_spec[1].setdefault("norm_in", input_scale(*self.trajectory[:3]))
         self.learner = self.fresh_learner(pid)
-        self.call_timeout = float(declare("call_timeout", 30.0))
-        self.wait_timeout = float(declare("wait_timeout", 30.0))
-        self.robot_clients = RobotClients(self, declare("step_service", "robot_sim/step"),
-                                          declare("reset_service", "robot_sim/reset"))
+        self.call_timeout = float(d("call_timeout", 30.0, "seconds for each robot call (step "
+                                    "or reset)", positive=True))
+        self.wait_timeout = float(d("wait_timeout", 30.0, "seconds to wait for the robot's "
+                                    "services", positive=True))
+        self.robot_clients = RobotClients(
+            self, d("step_service", "robot_sim/step", "the robot's StepRobot service (relative: "
+                    "in the node's namespace)"),
+            d("reset_service", "robot_sim/reset", "the robot's ResetRobot service"))
         self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
         self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
                                              self.robot.name)
@@ -79,14 +94,23 @@ class InverseDynamicsLearner(Node):
             f"{control_rate:g} Hz ({self.n_steps} physics steps each), "
             f"regressor {self.regressor_spec[0]}")
 
-    def task(self, declare, doubles):
+    def task(self, d, doubles):
         """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
-        kinematics = robot_kinematics(self.robot, doubles("centre_pose") or None)
+        kinematics = robot_kinematics(self.robot, doubles(
+            "centre_pose", "joint angles (rad) whose end-effector position is the star's centre; "
+            "every trial starts there; unset: zero clipped into the joint limits") or None)
         self.centre_pose = kinematics.home
-        return star_task(kinematics, declare("star_radius", 0.05), self.dt, doubles("star_u"),
-                         doubles("star_v"), declare("star_spread", 2 * np.pi),
-                         declare("star_start_angle", 0.0),
-                         time_law=declare("star_time_law", "minimum_jerk"))
+        return star_task(
+            kinematics, d("star_radius", 0.05, "the star's radius (m)", positive=True,
+                          finite=True), self.dt,
+            doubles("star_u", "first axis of the star's plane (world); unset: x"),
+            doubles("star_v", "second axis of the star's plane (world); unset: y"),
+            d("star_spread", 2 * np.pi, "the angle the star's lines spread over (rad)",
+              positive=True, finite=True),
+            d("star_start_angle", 0.0, "the angle of the first line (rad)", finite=True),
+            time_law=d("star_time_law", "minimum_jerk", "each 0.6 s leg's time law: "
+                       "minimum_jerk (from rest to rest) or linear (constant speed)",
+                       choices=list(TIME_LAWS)))
 
     def fresh_learner(self, pid):
         """A learner that knows nothing yet: a new regressor of the configured kind."""

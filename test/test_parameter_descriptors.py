@@ -89,6 +89,18 @@ NODES = {
         "/skill_learner", node("skill_learner", robot=ROBOTS / "meka_right_arm.toml"),
         {"robot", "n_joints", "dmp_weights_per_joint", "dmp_alpha_z", "physics_step",
          "settle_steps", "call_timeout", "reset_service"}),
+    "inverse_dynamics_learner": (
+        "/inverse_dynamics_learner",
+        node("inverse_dynamics_learner", robot=ROBOTS / "pincher_arm.toml", pid="[5.0, 0.01, 0.1]",
+             centre_pose="[0.0, 0.6, 0.9, 0.6]"),
+        {"robot", "pid", "centre_pose", "control_rate", "star_radius", "star_time_law",
+         "regressor", "regressor_params", "call_timeout", "step_service", "reset_service"}),
+    "inverse_dynamics_experiment": (
+        "/experiment",
+        script("scenarios/inverse_dynamics/run_experiment.py", "pairs_0.npz",
+               robot_files="[scenarios/robots/youbot_arm.toml, scenarios/robots/pincher_arm.toml]"),
+        {"robots", "robot_files", "targets", "seeds", "conditions", "n_trials", "latent_dim",
+         "start_noise", "interpolation", "babbling_line_samples", "call_timeout"}),
     "goal_babbling_experiment": (
         "/experiment",
         script("scenarios/goal_babbling/run_experiment.py", "guided_0.npz", **GOAL_BABBLING),

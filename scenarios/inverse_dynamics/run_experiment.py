@@ -58,7 +58,8 @@ from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
                                          TransferPoints)
-from lpa_transfer_nodes._ros_util import (ServiceCalls, from_matrix, run_job,  # noqa: E402
+from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
+                                          describe_use_sim_time, from_matrix, run_job,
                                           to_matrix, wait_for_services)
 
 
@@ -66,42 +67,56 @@ class Experiment(Node):
     def __init__(self, stop):
         super().__init__("experiment")
         self.stop = stop
-        declare = lambda name, default: self.declare_parameter(name, default).value  # noqa: E731
-        self.robots = list(declare("robots", ["youbot", "pincher"]))
-        files = list(declare("robot_files", [""]))
+        describe_use_sim_time(self)
+        d = lambda *args, **kwargs: declare(self, *args, **kwargs)  # noqa: E731
+        self.robots = list(d("robots", ["youbot", "pincher"], "the two robots' names (their "
+                             "namespaces); the first is the babbling's source"))
+        files = list(d("robot_files", [""], "their robot parameter files, in that order"))
         self.n_joints = {robot: load_robot_params(path).n_joints
                          for robot, path in zip(self.robots, files)}
-        self.targets = list(declare("targets", self.robots))   # which robots learn with transfer
+        self.targets = list(d("targets", self.robots, "the robots that learn with transfer "
+                              "(the other gives its experience); default: both"))
         if not self.targets or set(self.targets) - set(self.robots):
-            raise ValueError(f"targets must name some of the robots {self.robots}, got "
-                             f"{self.targets}")
-        self.stars = list(declare("stars", ["star1", "star2"]))
-        self.seeds = list(declare("seeds", [0]))
-        self.conditions = list(declare("conditions", list(CONDITIONS)))
+            raise ValueError(f"the parameter targets must name some of the robots "
+                             f"{self.robots}, got {self.targets}")
+        self.stars = list(d("stars", ["star1", "star2"], "the stars (learner nodes /<robot>/"
+                            "<star>)"))
+        self.seeds = list(d("seeds", [0], "the experiment seeds, one pair file per star each"))
+        self.conditions = list(d("conditions", list(CONDITIONS), "the initialisations run "
+                                 f"beside learning from scratch, of {list(CONDITIONS)}"))
         unknown = sorted(set(self.conditions) - set(CONDITIONS))
         if unknown:
             raise ValueError(f"unknown conditions {unknown}; known: {list(CONDITIONS)}")
-        self.n_trials = declare("n_trials", 20)
-        self.n_source_trials = declare("n_source_trials", 15)
-        self.fit = dict(latent_dim=declare("latent_dim", 16), n_min=declare("n_min", 40),
-                        c_min=declare("c_min", 1e-7))
-        self.tolerance = declare("convergence_tolerance", 0.1)
-        self.babbling_seconds = declare("babbling_seconds", 14.4)
-        self.start_noise = float(declare("start_noise", 0.0))
-        if not (np.isfinite(self.start_noise) and self.start_noise >= 0):
-            raise ValueError(f"start_noise must be a finite angle >= 0 (rad), got "
-                             f"{self.start_noise}")
+        self.n_trials = d("n_trials", 20, "trials of each condition", range=(1, None))
+        self.n_source_trials = d("n_source_trials", 15, "trials of the source's experience "
+                                 "from scratch that are transferred", range=(1, None))
+        self.fit = dict(
+            latent_dim=d("latent_dim", 16, "PA/LPA latent dimensions", range=(1, None)),
+            n_min=d("n_min", 40, "LPA's n_min (Alg. 3)", range=(1, None)),
+            c_min=d("c_min", 1e-7, "LPA's c_min (Alg. 3)", positive=True, finite=True))
+        self.tolerance = d("convergence_tolerance", 0.1, "converged: within this share of "
+                           "learning from scratch's final error", positive=True, finite=True)
+        self.babbling_seconds = d("babbling_seconds", 14.4, "babbling time (s) charged to "
+                                  "every initialised condition", range=(0.0, None), finite=True)
+        self.start_noise = float(d("start_noise", 0.0, "rad; > 0: each seed's runs start from "
+                                   "the rest pose moved by N(0, start_noise) per joint",
+                                   range=(0.0, None), finite=True))
         # §5.4.1: 'spline' reads q̇, τ and q̈ off smoothing splines per babbling line (pairs)
         # and per trial (the source's experience) before the fit and the transfer
         # (lpa_transfer.inverse_dynamics.interpolation; reference_results/ablation, Factor 4)
-        self.interpolation = declare("interpolation", "none")
-        if self.interpolation not in INTERPOLATIONS:
-            raise ValueError(f"interpolation must be one of {INTERPOLATIONS}, got "
-                             f"{self.interpolation!r}")
-        self.line_samples = declare("babbling_line_samples", 60)   # /babbling/* samples_per_segment
-        self.control_period = 1.0 / declare("control_rate", 100.0)  # the learners' rate (Hz)
-        self.output_dir = Path(declare("output_dir", "."))
-        self.timeout = float(declare("call_timeout", 600.0))
+        self.interpolation = d("interpolation", "none", "none: the pairs and the experience "
+                               "as sampled; spline: read off smoothing cubic splines (§5.4.1)",
+                               choices=list(INTERPOLATIONS))
+        self.line_samples = d("babbling_line_samples", 60, "samples of one babbling line "
+                              "(/babbling/* samples_per_segment): one spline each",
+                              range=(1, None))
+        self.control_period = 1.0 / d("control_rate", 100.0, "the learners' control rate "
+                                      "(Hz): the splines' sample period", positive=True,
+                                      finite=True)
+        self.output_dir = Path(d("output_dir", ".", "where the results, figures and report "
+                                 "go"))
+        self.timeout = float(d("call_timeout", 600.0, "seconds for each service call (a "
+                               "run_trials call lasts minutes)", positive=True))
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
         self.calls = ServiceCalls(self, self.spinner, self.timeout, stop)
@@ -161,7 +176,8 @@ class Experiment(Node):
     def run(self, pair_files):
         wait_for_services([self.client(RunTrials, f"/{r}/{s}/run_trials")
                            for r in self.robots for s in self.stars]
-                          + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop)
+                          + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop,
+                          self.spinner)
         run = [c for c in CONDITIONS if c == "uninitialised" or c in self.conditions]
         curves = {f"{r}/{s}/{c}": [] for r in self.targets for s in self.stars for c in run}
         tasks = [(robot, star) for robot in self.robots for star in self.stars]
