@@ -34,6 +34,9 @@ from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 #: (bench/bench_control_period.py).
 FastExecutor = EventsExecutor
 
+#: The frame of every pose and point the nodes publish (robot_sim's bases stand at its origin).
+WORLD_FRAME = "world"
+
 #: Correspondence topics: every sample must arrive (reliable, deep queue); the batch is
 #: latched (transient local) so that a subscriber that joins late still gets the last one.
 SAMPLE_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)

@@ -35,7 +35,8 @@ from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer._validation import check_x_bounds
 from lpa_transfer.robots.kinematics import hold_at_home
 from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz
-from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points
+from lpa_transfer.goal_babbling.reaching import (evaluation_points, reaching_errors,
+                                                 reaching_rate)
 from lpa_transfer.robots.environment import stepped_environment, task_dims
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
@@ -46,6 +47,8 @@ from lpa_transfer_nodes._ros_util import (RobotClients, ServiceTimeout, answerin
                                           describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
+from lpa_transfer_nodes.markers import (MISSED, REACHED, marker_array, sphere_list,
+                                        task_marker_publisher)
 
 #: Every evaluation should reach its subscribers, even many in one babble call.
 EVALUATION_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -117,8 +120,9 @@ class GoalBabblingLearner(Node):
         eval_bounds = tuple(doubles(f"eval_{end}", f"the {end} corner of the test points' box "
                                     f"(m); unset: X_bounds' {end} corner") or bound
                             for end, bound in zip(("low", "high"), self.x_bounds))
-        eval_spacing = declare(self, "eval_spacing", 0.05, "the test points' grid spacing (m)",
-                               positive=True, finite=True)
+        self.eval_spacing = eval_spacing = declare(
+            self, "eval_spacing", 0.05, "the test points' grid spacing (m)", positive=True,
+            finite=True)
         eval_joint_samples = declare(self, "eval_joint_samples", 20000, "the joint samples "
                                      "that find the reachable grid points (once, at start-up)",
                                      range=(1, None))
@@ -148,6 +152,7 @@ class GoalBabblingLearner(Node):
             self.steps_per_sample, on_sample=self.on_sample)
         self.sim_time = 0.0
         self.start_afresh()
+        self.marker_pub = task_marker_publisher(self)
         self.evaluation_pub = self.create_publisher(ReachingEvaluation, "reaching_evaluation",
                                                     EVALUATION_QOS)
         self.create_service(InitialiseSensorimotor, "~/initialise",
@@ -342,11 +347,10 @@ class GoalBabblingLearner(Node):
         """Evaluate L⁻¹ on the test points (analytic kinematics) and publish the result."""
         n_own, n_transferred = self.counts()
         if n_own + n_transferred:
-            reaching = evaluate_reaching(self.model.inverse, self.kinematics, self.points,
-                                         self.threshold)
-            mean_error, rate = reaching.mean_error, reaching.rate
+            errors = reaching_errors(self.model.inverse, self.kinematics, self.points)
+            mean_error, rate = float(errors.mean()), reaching_rate(errors, self.threshold)
         else:   # nothing learned yet: no command to evaluate
-            mean_error, rate = math.nan, 0.0
+            errors, mean_error, rate = np.full(len(self.points), np.inf), math.nan, 0.0
         msg = ReachingEvaluation(
             robot=self.robot.name, learning_time=float(self.clock), mean_error=float(mean_error),
             reaching_rate=float(rate), reaching_threshold=self.threshold,
@@ -354,6 +358,14 @@ class GoalBabblingLearner(Node):
             n_transferred_samples=int(n_transferred))
         msg.header.stamp, msg.header.frame_id = sim_stamp(self.sim_time), "world"
         self.evaluation_pub.publish(msg)
+        # the test points on task_markers: green reached within the threshold, red not
+        # (task coordinates are the first of world x, y, z: a planar chain's z is 0)
+        points = np.zeros((len(self.points), 3))
+        points[:, :self.n_task] = self.points
+        colours = np.where((errors <= self.threshold)[:, None], REACHED, MISSED)
+        self.marker_pub.publish(marker_array(sphere_list(
+            f"{self.get_name()}/test_points", 0, points, colours, msg.header.stamp,
+            diameter=0.4 * self.eval_spacing)))
         self.get_logger().info(f"t = {self.clock:g} s: " + self.describe(msg))
         return msg
 

@@ -38,6 +38,8 @@ from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service,
                                           declare_array, describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
+from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_array,
+                                        task_marker_publisher)
 
 
 class InverseDynamicsLearner(Node):
@@ -85,6 +87,8 @@ class InverseDynamicsLearner(Node):
                                              self.robot.name)
         self.trial = 0
         self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
+        self.marker_pub = task_marker_publisher(self)
+        self.publish_markers(sim_stamp(0.0))
         self.create_service(InitialiseLearner, "~/initialise",
                             answering(self, "initialise", self.initialise))
         self.create_service(RunTrials, "~/run_trials", answering(self, "run_trials",
@@ -111,6 +115,15 @@ class InverseDynamicsLearner(Node):
             time_law=d("star_time_law", "minimum_jerk", "each 0.6 s leg's time law: "
                        "minimum_jerk (from rest to rest) or linear (constant speed)",
                        choices=list(TIME_LAWS)))
+
+    def publish_markers(self, stamp, actual=None):
+        """The star's desired end-effector path and, after a trial, the path it tracked, on
+        the latched ``task_markers`` (frame world)."""
+        name = self.get_name()
+        markers = [line_strip(f"{name}/desired", 0, self.trajectory[3], DESIRED, stamp)]
+        if actual is not None:
+            markers.append(line_strip(f"{name}/actual", 0, actual, ACTUAL, stamp))
+        self.marker_pub.publish(marker_array(*markers))
 
     def fresh_learner(self, pid):
         """A learner that knows nothing yet: a new regressor of the configured kind."""
@@ -176,6 +189,7 @@ class InverseDynamicsLearner(Node):
                           actual=to_matrix(trial.actual))
         msg.header.stamp, msg.header.frame_id = sim_stamp(trial.end_state.time), "world"
         self.result_pub.publish(msg)
+        self.publish_markers(msg.header.stamp, trial.actual)
         self.get_logger().info(f"trial {self.trial}: tracking error "
                                f"{1e3 * trial.tracking_error:.2f} mm")
 

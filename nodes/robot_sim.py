@@ -42,11 +42,10 @@ from tf2_msgs.msg import TFMessage
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (CLOCK_QOS, LATCHED_QOS, TF_QOS, FastExecutor, answering, declare,
+from lpa_transfer_nodes._ros_util import (CLOCK_QOS, LATCHED_QOS, TF_QOS, WORLD_FRAME,
+                                          FastExecutor, answering, declare,
                                           declare_array, describe_use_sim_time, serve,
                                           sim_stamp)
-
-WORLD_FRAME = "world"
 
 
 class RobotSim(Node):

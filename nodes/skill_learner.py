@@ -31,6 +31,7 @@ from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service,
                                           describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
+from lpa_transfer_nodes.markers import ACTUAL, line_strip, marker_array, task_marker_publisher
 
 
 class SkillLearner(Node):
@@ -70,6 +71,7 @@ class SkillLearner(Node):
         self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
                                              self.robot.name)
         self.publisher = self.create_publisher(SkillReproduction, "skill_reproduction", 10)
+        self.marker_pub, self.executed = task_marker_publisher(self), {}
         self.create_service(LearnSkill, "~/learn_skill",
                             answering(self, "learn_skill", self.learn_skill))
         step_service = self.robot_clients.node.resolve_service_name(
@@ -119,6 +121,11 @@ class SkillLearner(Node):
                                 executed_points=to_matrix(points))
         msg.header.stamp, msg.header.frame_id = sim_stamp(state.time), "world"
         self.publisher.publish(msg)
+        # every shape executed so far, on task_markers (frame world)
+        self.executed[request.shape] = points
+        self.marker_pub.publish(marker_array(*(
+            line_strip(f"{self.get_name()}/{shape}", 0, path, ACTUAL, msg.header.stamp)
+            for shape, path in sorted(self.executed.items()))))
         response.reproduction = msg
         distance = np.linalg.norm(points - self.kinematics.forward(reproduced), axis=1).mean()
         return (f"{request.shape}: DMP on {len(joints)} demonstrations, executed {len(t)} "

@@ -14,6 +14,7 @@ from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation
 from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
 from sensor_msgs.msg import JointState
+from visualization_msgs.msg import Marker, MarkerArray
 
 TARGET = ROOT / "scenarios" / "robots" / "goal_babbling_target.toml"
 LINKS = (0.7, 0.4)
@@ -49,6 +50,9 @@ def learners(tmp_path_factory):
     received = []
     client.node.create_subscription(ReachingEvaluation, "/target/reaching_evaluation",
                                     received.append, 100)
+    client.markers = []      # the learner's task_markers arrays
+    client.node.create_subscription(MarkerArray, "/target/goal_babbling_learner/task_markers",
+                                    client.markers.append, 100)
 
     def clients(namespace):
         prefix = f"/{namespace}/goal_babbling_learner"
@@ -108,6 +112,15 @@ def test_babbling_learns_from_what_the_robot_did(learners):
     assert stamps[-1] == pytest.approx(answer.sim_time, abs=1e-6)
     assert np.diff(stamps) == pytest.approx([10.0, 10.0], abs=1e-6)   # 100 steps of 1 ms
     assert received[0].header.frame_id == "world"
+    # each evaluation's test points on task_markers: reached (green) as many as the rate says
+    client.spin_until(lambda: client.markers and client.markers[-1].markers[-1].header.stamp
+                      == received[-1].header.stamp, timeout=10, what="the last markers")
+    clear, points = client.markers[-1].markers
+    assert clear.action == Marker.DELETEALL and points.type == Marker.SPHERE_LIST
+    assert len(points.points) == len(points.colors) == last.n_test_points
+    green = sum(c.g > c.r for c in points.colors)
+    assert green == round(last.reaching_rate * last.n_test_points)
+    assert all(p.z == 0.0 for p in points.points) and points.header.frame_id == "world"
 
 
 def test_initialising_with_own_samples_beats_a_fresh_model(learners):

@@ -14,7 +14,7 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 from tf_tree import world_poses
 from lpa_transfer.inverse_dynamics.report import merge
-from lpa_transfer.recording.bag import summary
+from lpa_transfer.recording.bag import decoded_messages, summary
 from lpa_transfer.recording.scene import render
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.serial_chain import forward_kinematics
@@ -126,6 +126,36 @@ def test_the_bag_shows_each_robot_to_an_independent_reader(smoke_run):
         assert set(ours) == set(theirs)
         assert all(np.allclose(ours[f], theirs[f][:3, 3], atol=1e-12) for f in ours), robot
         assert len(scene[robot]["trail"]) > 100
+        assert [m.ns for m in scene[robot]["markers"]] == ["star1/desired", "star1/actual"]
+
+
+def test_the_task_markers_show_the_star_and_the_last_trial(smoke_run):
+    """Issue 28: each learner's latched ~/task_markers (visualization_msgs/MarkerArray, read
+    with rosbags' Jazzy types) clears its earlier markers and draws the star's desired path
+    and the last trial's path, point for point those of its TrialResult (read with the
+    project's own decoder)."""
+    store = get_typestore(Stores.ROS2_JAZZY)
+    trials = {robot: [m for _, _, m in decoded_messages(smoke_run / "run.mcap",
+                                                          [f"/{robot}/trial_result"])]
+              for robot in ROBOTS}
+    with Reader(smoke_run / "run.mcap") as reader:
+        for robot in ROBOTS:
+            topic = f"/{robot}/star1/task_markers"
+            connections = [c for c in reader.connections if c.topic == topic]
+            arrays = [store.deserialize_cdr(raw, c.msgtype)
+                      for c, _, raw in reader.messages(connections=connections)]
+            # one at start (the star alone), one after every trial
+            assert len(arrays) == 1 + len(trials[robot]), robot
+            assert [(m.action, m.type) for m in arrays[0].markers] == [(3, 0), (0, 4)]  # clear, star
+            last = arrays[-1].markers
+            assert [(m.action, m.type, m.ns) for m in last[1:]] == [
+                (0, 4, "star1/desired"), (0, 4, "star1/actual")]
+            assert last[0].action == 3 and all(m.header.frame_id == "world" for m in last)
+            trial = trials[robot][-1]
+            for marker, matrix in zip(last[1:], (trial.desired, trial.actual)):
+                expected = np.reshape(matrix.data, (matrix.rows, matrix.cols))
+                drawn = np.array([(p.x, p.y, p.z) for p in marker.points])
+                assert np.array_equal(drawn, expected), (robot, marker.ns)
 
 
 def test_spline_interpolation_puts_the_transferred_data_on_the_task(smoke_run, tmp_path):

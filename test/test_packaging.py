@@ -13,6 +13,7 @@ KEYS = {"numpy": "python3-numpy", "scipy": "python3-scipy", "sklearn": "python3-
         "std_msgs": "std_msgs", "sensor_msgs": "sensor_msgs", "geometry_msgs": "geometry_msgs",
         "builtin_interfaces": "builtin_interfaces", "rcl_interfaces": "rcl_interfaces",
         "rosgraph_msgs": "rosgraph_msgs", "tf2_msgs": "tf2_msgs",
+        "visualization_msgs": "visualization_msgs",
         "mcap_ros2": "python3-mcap-ros2-support-pip",
         "lpa_transfer_interfaces": "lpa_transfer_interfaces",
         "zstandard": "python3-zstandard"}

@@ -16,6 +16,7 @@ from lpa_transfer.robots.kinematics import arm_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
+from visualization_msgs.msg import Marker, MarkerArray
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
 
 MEKA = ROOT / "scenarios" / "robots" / "meka_right_arm.toml"
@@ -57,6 +58,9 @@ def learner(tmp_path_factory):
     published = []
     client.node.create_subscription(SkillReproduction, "/meka/skill_reproduction",
                                     published.append, 10)
+    client.markers = []      # the learner's task_markers arrays
+    client.node.create_subscription(MarkerArray, "/meka/skill_learner/task_markers",
+                                    client.markers.append, 10)
     learn = client.node.create_client(LearnSkill, "/meka/skill_learner/learn_skill")
     try:
         client.spin_until(lambda: client.node.count_publishers("/meka/skill_reproduction"),
@@ -103,6 +107,13 @@ def test_learns_and_executes_a_skill(learner):
     assert np.array_equal(np.array(msg.times), times)
     assert np.array_equal(from_matrix(msg.reproduced_joints, "joints"), joints)
     assert np.array_equal(from_matrix(msg.executed_points, "points"), points)
+    # the executed letter on task_markers (latched; frame world), point for point
+    client.spin_until(lambda: client.markers, timeout=10, what="the task markers")
+    clear, *lines = client.markers[-1].markers
+    assert clear.action == Marker.DELETEALL
+    line = next(m for m in lines if m.ns == "skill_learner/Wave")
+    assert line.type == Marker.LINE_STRIP and line.header.frame_id == "world"
+    assert np.array_equal([(p.x, p.y, p.z) for p in line.points], points)
 
 
 def bad_requests():

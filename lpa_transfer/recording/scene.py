@@ -4,7 +4,9 @@ Each ``robot_sim`` publishes its URDF on ``/<robot>/robot_description``, the bas
 ``world`` on ``/tf_static`` and every link relative to its parent on ``/tf`` (frames
 ``<robot>/<link>``). :func:`robot_poses` chains those transforms of one moment into world
 poses, as a TF listener would; :func:`render` draws each robot as a stick figure (a line from
-every link frame's parent to it) with its end effector's recent path, one panel per robot, so
+every link frame's parent to it) with its end effector's recent path and the latest task
+markers of its learners (``/<robot>/.../task_markers``: lines and point lists), one panel per
+robot, so
 that a run can be looked at without Foxglove and the picture checks what Foxglove would show.
 
 The simulator's world has gravity along -y (``lpa_transfer.robots.planar_chain``): the
@@ -22,6 +24,8 @@ import numpy as np
 from lpa_transfer.recording.bag import BagError, decoded_messages, summary
 
 DESCRIPTION = re.compile(r"^/(?P<robot>.+)/robot_description$")
+MARKERS = re.compile(r"^/(?P<robot>[^/]+)/(.+/)?task_markers$")
+LINE_STRIP, SPHERE_LIST = 4, 7         # visualization_msgs/Marker types drawn
 
 
 def _seconds(stamp):
@@ -63,19 +67,27 @@ def chain(transforms, root="world"):
 
 def robot_poses(path, at=None, trail=10.0):
     """Each robot of the bag at simulated time ``at`` (s; default: its last state):
-    ``{robot: dict(time, urdf, frames={frame: (parent, pose)}, trail=(N, 3))}``, ``trail``
-    the end effector's positions over the ``trail`` seconds before. BagError when the bag has
+    ``{robot: dict(time, urdf, frames={frame: (parent, pose)}, trail=(N, 3), markers)}``,
+    ``trail`` the end effector's positions over the ``trail`` seconds before, ``markers`` the
+    LINE_STRIP and SPHERE_LIST markers of the robot's latest task_markers arrays. BagError when the bag has
     no robot_description, or a robot no transforms up to ``at``."""
     robots = sorted(m.group("robot") for topic in summary(path)
                     if (m := DESCRIPTION.match(topic)))
     if not robots:
         raise BagError(f"{path}: no /<robot>/robot_description topic: nothing to draw (was "
                        "robot_sim's publish_tf on and the topic recorded?)")
+    marker_topics = [topic for topic in summary(path) if (m := MARKERS.match(topic))
+                     and m.group("robot") in robots]
     topics = ["/tf", "/tf_static", *(f"/{r}/robot_description" for r in robots),
-              *(f"/{r}/end_effector" for r in robots)]
+              *(f"/{r}/end_effector" for r in robots), *marker_topics]
     static, latest, urdf, points = [], {}, {}, {r: [] for r in robots}
+    markers = {}
     for topic, _, message in decoded_messages(path, topics):
-        if topic == "/tf_static":
+        if topic in marker_topics:
+            added = [m for m in message.markers if m.type in (LINE_STRIP, SPHERE_LIST)]
+            if added and (at is None or _seconds(added[0].header.stamp) <= at):
+                markers[topic] = added
+        elif topic == "/tf_static":
             static.extend(message.transforms)
         elif topic == "/tf":
             if not message.transforms:
@@ -100,7 +112,10 @@ def robot_poses(path, at=None, trail=10.0):
         track = np.array([p[1:] for p in points[robot] if stamp - trail <= p[0] <= stamp])
         scene[robot] = dict(time=stamp, urdf=urdf[robot],
                             frames=chain(own_static + list(transforms)),
-                            trail=track.reshape(-1, 3))
+                            trail=track.reshape(-1, 3),
+                            markers=[marker for topic, added in sorted(markers.items())
+                                     if MARKERS.match(topic).group("robot") == robot
+                                     for marker in added])
     return scene
 
 
@@ -127,9 +142,21 @@ def render(path, output, at=None, trail=10.0):
                      label="link frames (TF)")
         if len(view["trail"]):
             path_ = view["trail"]
-            axes.plot(path_[:, 0], path_[:, 2], path_[:, 1], color="tab:orange", lw=1,
+            axes.plot(path_[:, 0], path_[:, 2], path_[:, 1], color="0.55", lw=0.8,
                       label=f"end effector, last {trail:g} s")
-        everything = np.vstack([points, view["trail"], np.zeros((1, 3))])
+        drawn = []
+        for marker in view["markers"]:
+            xyz = np.array([(p.x, p.y, p.z) for p in marker.points]).reshape(-1, 3)
+            drawn.append(xyz)
+            if marker.type == LINE_STRIP:
+                c = marker.color
+                axes.plot(xyz[:, 0], xyz[:, 2], xyz[:, 1], color=(c.r, c.g, c.b), lw=1.2,
+                          label=f"task: {marker.ns}")
+            else:
+                colours = [(c.r, c.g, c.b) for c in marker.colors] or "k"
+                axes.scatter(xyz[:, 0], xyz[:, 2], xyz[:, 1], c=colours, s=6,
+                             label=f"task: {marker.ns}")
+        everything = np.vstack([points, view["trail"], np.zeros((1, 3)), *drawn])
         centre = (everything.max(0) + everything.min(0)) / 2
         half = max(float((everything.max(0) - everything.min(0)).max()) / 2, 0.05)
         axes.set_xlim(centre[0] - half, centre[0] + half)
@@ -141,8 +168,8 @@ def render(path, output, at=None, trail=10.0):
         axes.view_init(elev=15, azim=-75)      # nearly facing the x-y plane the arms move in
         axes.set_title(f"{robot} at t = {view['time']:.2f} s (simulated)")
         axes.legend(loc="upper left", fontsize=8)
-    figure.suptitle(f"{Path(path).name}: robot_description and /tf, as Foxglove's 3-D panel "
-                    "reads them", fontsize=10)
+    figure.suptitle(f"{Path(path).name}: robot_description, /tf and task_markers, as "
+                    "Foxglove's 3-D panel reads them", fontsize=10)
     figure.tight_layout()
     figure.savefig(output, dpi=100)
     plt.close(figure)
