@@ -243,6 +243,99 @@ def answering(node, name, handler):
     return callback
 
 
+class JobCancelled(Exception):
+    """Raised by a long job's handler when its client cancelled the goal (:func:`long_job`)."""
+
+
+def long_job(node, action_type, name, handler, busy):
+    """An action server ``name`` (e.g. ``~/run_trials``) for a job that runs for minutes,
+    around ``handler(goal, result, feedback, cancelled) -> message``.
+
+    ``feedback(**fields)`` publishes the action's Feedback; ``cancelled()`` is True once the
+    client asked to cancel, and the handler then raises :class:`JobCancelled` at its next
+    step (the goal ends canceled). ``success`` and ``message`` of the Result are filled as
+    :func:`answering` fills a response: the handler's message; a ValueError's text (the goal
+    aborted, e.g. a bad goal); "internal error" for anything else (traceback logged). One goal
+    at a time: ``busy`` (a threading.Lock the node's other state-changing services also take)
+    is held while a goal runs, and a goal that arrives meanwhile is rejected. The server is
+    in its own reentrant callback group, so with a multi-threaded executor a cancel is heard
+    while the job runs.
+    """
+    from rclpy.action import ActionServer, CancelResponse, GoalResponse
+    from rclpy.callback_groups import ReentrantCallbackGroup
+
+    def on_goal(goal):
+        if busy.acquire(blocking=False):
+            return GoalResponse.ACCEPT
+        node.get_logger().warning(f"{name}: goal rejected, a job is running")
+        return GoalResponse.REJECT
+
+    def execute(goal_handle):
+        result, start = action_type.Result(), time.perf_counter()
+        try:
+            result.message = handler(
+                goal_handle.request, result,
+                lambda **fields: goal_handle.publish_feedback(action_type.Feedback(**fields)),
+                lambda: goal_handle.is_cancel_requested)
+            result.success = True
+            goal_handle.succeed()
+        except JobCancelled as exc:
+            result.success, result.message = False, f"cancelled: {exc}"
+            goal_handle.canceled()
+        except ValueError as exc:
+            result.success, result.message = False, str(exc)
+            goal_handle.abort()
+        except Exception as exc:  # keep serving whatever happens; the log has the trace
+            node.get_logger().error(f"{name} failed:\n{traceback.format_exc()}")
+            result.success, result.message = False, f"internal error: {exc!r}"
+            goal_handle.abort()
+        finally:
+            busy.release()
+        node.get_logger().info(f"{name}: {result.message} "
+                               f"({time.perf_counter() - start:.1f} s)")
+        return result
+
+    return ActionServer(node, action_type, name, execute, goal_callback=on_goal,
+                        cancel_callback=lambda goal_handle: CancelResponse.ACCEPT,
+                        callback_group=ReentrantCallbackGroup())
+
+
+def run_action(executor, client, goal, timeout, stop=None, on_feedback=None):
+    """Send ``goal`` to an action server and spin ``executor`` until its result arrives;
+    returns the Result. ``on_feedback(feedback)`` sees each Feedback. After ``timeout`` s, or
+    once ``stop`` (SIGINT/SIGTERM) is set, the goal is cancelled and ServiceTimeout raised;
+    RuntimeError if the server rejects the goal."""
+    name = client._action_name
+    deadline = time.monotonic() + timeout
+
+    def wait(future, what):
+        while not future.done():
+            stopped = stop is not None and stop.is_set()
+            if stopped or time.monotonic() > deadline:
+                return "stopped" if stopped else "timeout"
+            executor.spin_once(timeout_sec=0.05)
+        return None
+
+    sent = client.send_goal_async(
+        goal, feedback_callback=None if on_feedback is None
+        else lambda message: on_feedback(message.feedback))
+    if (why := wait(sent, "acceptance")) is not None:
+        raise ServiceTimeout(f"{why} while action {name} took the goal")
+    handle = sent.result()
+    if not handle.accepted:
+        raise RuntimeError(f"action {name} rejected the goal (it runs one goal at a time)")
+    answer = handle.get_result_async()
+    if (why := wait(answer, "result")) is not None:
+        cancel, until = handle.cancel_goal_async(), time.monotonic() + 5.0
+        while not cancel.done() and time.monotonic() < until:
+            executor.spin_once(timeout_sec=0.05)
+        raise ServiceTimeout(f"stopped while waiting for action {name} (goal cancelled)"
+                             if why == "stopped" else
+                             f"action {name} did not finish within {timeout:g} s (goal "
+                             "cancelled)")
+    return answer.result().result
+
+
 def init_with_stop_event(args=None):
     """``rclpy.init`` without rclpy's signal handlers; SIGINT/SIGTERM set the returned event.
 
@@ -293,12 +386,31 @@ def spin_until_stopped(node, stop, executor_class=SingleThreadedExecutor):
     try:
         while rclpy.ok() and not stop.is_set():
             executor.spin_once(timeout_sec=0.2)
+        _drain(node, executor)
     except ExternalShutdownException:
         pass
     finally:
         executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
+
+
+def _drain(node, executor, timeout=5.0):
+    """After SIGINT/SIGTERM: a long job (:func:`long_job`, its ``node.busy`` lock held) sees
+    the stop at its next step and ends; spin until it has and its result has gone out, so
+    its client gets the answer "stopped" rather than nothing (at most ``timeout`` s)."""
+    busy = getattr(node, "busy", None)
+    if busy is None:
+        return
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if busy.acquire(blocking=False):
+            busy.release()
+            flush = time.monotonic() + 0.3         # the result response, then stop
+            while time.monotonic() < flush:
+                executor.spin_once(timeout_sec=0.05)
+            return
+        executor.spin_once(timeout_sec=0.05)
 
 
 class ServiceTimeout(RuntimeError):
@@ -312,7 +424,8 @@ SETTLE_SECONDS = 0.5
 
 
 def wait_for_services(clients, timeout, stop, executor=None):
-    """Wait until every client's service is available; ServiceTimeout after ``timeout`` s.
+    """Wait until every client's service (or action server, for an ActionClient) is
+    available; ServiceTimeout after ``timeout`` s.
 
     With an ``executor`` (a job node's own), it spins while it waits, so that the node
     answers meanwhile, e.g. its parameter services (``~/describe_parameters``).
@@ -325,18 +438,20 @@ def wait_for_services(clients, timeout, stop, executor=None):
     """
     deadline = time.monotonic() + timeout
     def available(client):
+        action = hasattr(client, "server_is_ready")      # an rclpy ActionClient
         if executor is None:
-            return client.wait_for_service(timeout_sec=0.2)
+            return (client.wait_for_server if action else client.wait_for_service)(
+                timeout_sec=0.2)
         executor.spin_once(timeout_sec=0.1)
-        return client.service_is_ready()
+        return client.server_is_ready() if action else client.service_is_ready()
 
     for client in clients:
+        name = getattr(client, "srv_name", None) or f"action {client._action_name}"
         while not available(client):
             if stop.is_set():
-                raise ServiceTimeout(f"stopped (SIGINT/SIGTERM) while waiting for "
-                                     f"{client.srv_name}")
+                raise ServiceTimeout(f"stopped (SIGINT/SIGTERM) while waiting for {name}")
             if time.monotonic() > deadline:
-                raise ServiceTimeout(f"service {client.srv_name} is not available after "
+                raise ServiceTimeout(f"service {name} is not available after "
                                      f"{timeout:g} s (is its node running, in this ROS domain?)")
     fresh = [client for client in clients if client not in _SETTLED]
     if fresh and not stop.wait(SETTLE_SECONDS):
@@ -464,9 +579,10 @@ def run_job(name, make_node, job, args=None):
 
 
 class ServiceCalls:
-    """Blocking service calls of a job node (an experiment client): one client per service
-    name, made on first use; ``call(srv_type, name, **request_fields)`` returns the answer
-    and raises RuntimeError when it says ``success = false``."""
+    """Blocking service calls and action goals of a job node (an experiment client): one
+    client per name, made on first use; ``call(srv_type, name, **request_fields)`` returns
+    the answer, ``run(action_type, name, **goal_fields)`` the result; both raise RuntimeError
+    when it says ``success = false``."""
 
     def __init__(self, node, executor, timeout, stop):
         self.node, self.executor, self.timeout, self.stop = node, executor, timeout, stop
@@ -483,6 +599,22 @@ class ServiceCalls:
         if not answer.success:
             raise RuntimeError(f"{name} failed: {answer.message}")
         return answer
+
+    def action_client(self, action_type, name):
+        from rclpy.action import ActionClient
+
+        if name not in self.clients:
+            self.clients[name] = ActionClient(self.node, action_type, name)
+        return self.clients[name]
+
+    def run(self, action_type, name, on_feedback=None, **fields):
+        """Run the goal ``fields`` on the action ``name`` (:func:`run_action`); its Result,
+        RuntimeError when it says ``success = false``."""
+        result = run_action(self.executor, self.action_client(action_type, name),
+                            action_type.Goal(**fields), self.timeout, self.stop, on_feedback)
+        if not result.success:
+            raise RuntimeError(f"{name} failed: {result.message}")
+        return result
 
 
 def matrix_from_rows(rows, cols, data, name):

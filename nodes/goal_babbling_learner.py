@@ -13,7 +13,8 @@ StepRobot service, into a K-nearest-neighbour inverse model L⁻¹
 (§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration) and with
 experience transferred from another robot, optionally behind the guard against negative
 transfer (:class:`lpa_transfer.goal_babbling.negative_transfer.GuardedModel`, §6.6);
-``~/babble`` goal-babbles for some simulated seconds. Progress is measured as in §6.5
+the action ``~/babble`` goal-babbles for some simulated seconds (feedback at every
+evaluation, cancel between steps). Progress is measured as in §6.5
 (:mod:`lpa_transfer.goal_babbling.reaching`): the mean reaching error and the reaching rate of
 L⁻¹ on test points in the reachable part of a task box, executed on the robot's ANALYTIC
 forward kinematics (evaluating never moves the simulated robot), published on
@@ -24,8 +25,10 @@ Parameters, topics, services and the learner's clock: docs/nodes.md.
 import json
 import math
 import os
+import threading
 
 import numpy as np
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -41,8 +44,10 @@ from lpa_transfer.robots.environment import stepped_environment, task_dims
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
-from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
-from lpa_transfer_nodes._ros_util import (RobotClients, ServiceTimeout, answering,
+from lpa_transfer_interfaces.action import GoalBabble
+from lpa_transfer_interfaces.srv import InitialiseSensorimotor
+from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, ServiceTimeout,
+                                          answering, long_job,
                                           call_service, declare, declare_array,
                                           describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
@@ -155,9 +160,10 @@ class GoalBabblingLearner(Node):
         self.marker_pub = task_marker_publisher(self)
         self.evaluation_pub = self.create_publisher(ReachingEvaluation, "reaching_evaluation",
                                                     EVALUATION_QOS)
+        self.busy = threading.Lock()   # held while a babble goal runs
         self.create_service(InitialiseSensorimotor, "~/initialise",
                             answering(self, "initialise", self.initialise))
-        self.create_service(GoalBabble, "~/babble", answering(self, "babble", self.babble))
+        self.babble_server = long_job(self, GoalBabble, "~/babble", self.babble, self.busy)
         self.get_logger().info(
             f"{self.robot.name}: goal babbling in X_bounds {self.x_bounds[0].tolist()} .. "
             f"{self.x_bounds[1].tolist()} from home {self.kinematics.home.tolist()}, "
@@ -264,6 +270,14 @@ class GoalBabblingLearner(Node):
         return values[finite], int(np.count_nonzero(~finite))
 
     def initialise(self, request, response):
+        if not self.busy.acquire(blocking=False):
+            raise ValueError("a babble goal is running: initialise after it (or cancel it)")
+        try:
+            return self._initialise(request, response)
+        finally:
+            self.busy.release()
+
+    def _initialise(self, request, response):
         own, rejected_own = self.rows(request.own, "own")
         transferred, rejected_transferred = self.rows(request.transferred, "transferred")
         elapsed = request.elapsed
@@ -292,8 +306,10 @@ class GoalBabblingLearner(Node):
         return (f"learned {len(own)} own and {len(transferred)} transferred samples, rejected "
                 f"{response.n_rejected}; " + self.describe(response.evaluation))
 
-    def babble(self, request, response):
-        seconds, interval = request.seconds, request.evaluation_interval
+    def babble(self, goal, result, feedback, cancelled):
+        """The GoalBabble action: ``goal.seconds`` of goal babbling, feedback at every
+        evaluation; a cancel or SIGINT stops at the next step (the steps done stay learned)."""
+        seconds, interval = goal.seconds, goal.evaluation_interval
         for name, value in (("seconds", seconds), ("evaluation_interval", interval)):
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0 (s), got {value}")
@@ -310,6 +326,10 @@ class GoalBabblingLearner(Node):
 
         last = [multiples(self.clock)]
 
+        def evaluated():
+            evaluations.append(self.evaluate())
+            feedback(evaluation=evaluations[-1], steps_done=done[0], n_steps=n_steps)
+
         def after_step(babbling):   # the learner's clock, not the babbler's, sets the times
             done[0] += 1
             if self.stop.is_set():
@@ -317,20 +337,26 @@ class GoalBabblingLearner(Node):
             reached = multiples(self.clock)
             if reached > last[0]:
                 last[0] = reached
-                evaluations.append(self.evaluate())
+                evaluated()
             elif done[0] == n_steps:
-                evaluations.append(self.evaluate())
+                evaluated()
+            if cancelled() and done[0] < n_steps:
+                raise JobCancelled()
 
         try:
             positions, points = self.babbling.run(n_steps, after_step, 1)
         except Stopped:   # between two steps or waiting for the robot's answer
             raise Stopped(f"stopped (SIGINT/SIGTERM) after {done[0]} of {n_steps} steps; "
                           f"they stay learned") from None
+        except JobCancelled:
+            result.evaluations, result.sim_time = evaluations, self.sim_time
+            raise JobCancelled(f"after {done[0]} of {n_steps} steps, at t = {self.clock:g} s "
+                               "(they stay learned)") from None
         if not n_steps:
-            evaluations.append(self.evaluate())
-        response.evaluations = evaluations
-        response.experience = to_matrix(np.hstack((positions, points)))
-        response.sim_time = self.sim_time
+            evaluated()
+        result.evaluations = evaluations
+        result.experience = to_matrix(np.hstack((positions, points)))
+        result.sim_time = self.sim_time
         return (f"babbled {n_steps} steps to t = {self.clock:g} s; "
                 + self.describe(evaluations[-1]))
 
@@ -381,7 +407,9 @@ class GoalBabblingLearner(Node):
 
 
 def main(args=None):
-    serve("goal_babbling_learner", GoalBabblingLearner, args)
+    # multi-threaded: a cancel of the babble goal is heard while the babbling runs
+    serve("goal_babbling_learner", GoalBabblingLearner, args,
+          executor_class=MultiThreadedExecutor)
 
 
 if __name__ == "__main__":

@@ -13,15 +13,18 @@ torque τ_ff(q_d, q̇_d, q̈_d) plus PID feedback, then one online update from t
 around the end-effector position of ``centre_pose``, tracked in trials of 8.4 s.
 
 ``~/initialise`` (InitialiseLearner) learns offline from (q, q̇, q̈, τ) samples, e.g. another
-robot's experience transferred through the mapping service; ``~/run_trials`` (RunTrials) runs
-trials from rest at ``centre_pose``, each also published on ``trial_result``.
+robot's experience transferred through the mapping service; the action ``~/run_trials``
+(RunTrials) runs trials from rest at ``centre_pose``, with feedback after each trial and
+cancel between trials, each trial also published on ``trial_result``.
 
 Parameters, topics and services: docs/nodes.md.
 """
 import json
 import os
+import threading
 
 import numpy as np
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -33,9 +36,11 @@ from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, i
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
 from lpa_transfer_interfaces.msg import TrialResult
-from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
-from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, declare,
-                                          declare_array, describe_use_sim_time, from_matrix,
+from lpa_transfer_interfaces.action import RunTrials
+from lpa_transfer_interfaces.srv import InitialiseLearner
+from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, answering, call_service,
+                                          declare, declare_array, describe_use_sim_time,
+                                          from_matrix, long_job,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
 from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_array,
@@ -89,10 +94,11 @@ class InverseDynamicsLearner(Node):
         self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
         self.marker_pub = task_marker_publisher(self)
         self.publish_markers(sim_stamp(0.0))
+        self.busy = threading.Lock()   # held while a run_trials goal runs
         self.create_service(InitialiseLearner, "~/initialise",
                             answering(self, "initialise", self.initialise))
-        self.create_service(RunTrials, "~/run_trials", answering(self, "run_trials",
-                                                                 self.run_trials))
+        self.run_trials_server = long_job(self, RunTrials, "~/run_trials", self.run_trials,
+                                          self.busy)
         self.get_logger().info(
             f"{self.robot.name}: star of {len(self.trajectory[0])} periods at "
             f"{control_rate:g} Hz ({self.n_steps} physics steps each), "
@@ -134,6 +140,14 @@ class InverseDynamicsLearner(Node):
         return call_service(self.robot_clients.executor, client, request, self.call_timeout)
 
     def initialise(self, request, response):
+        if not self.busy.acquire(blocking=False):
+            raise ValueError("a run_trials goal is running: initialise after it (or cancel it)")
+        try:
+            return self._initialise(request, response)
+        finally:
+            self.busy.release()
+
+    def _initialise(self, request, response):
         samples = from_matrix(request.samples, "samples")
         if samples.shape[1] != 4 * self.robot.n_joints:
             raise ValueError(f"samples need 4 x {self.robot.n_joints} columns (q, q_dot, "
@@ -146,15 +160,28 @@ class InverseDynamicsLearner(Node):
         response.n_rejected = self.learner.n_rejected_ - rejected_before
         return f"learned {response.n_learned} samples, rejected {response.n_rejected}"
 
-    def run_trials(self, request, response):
+    def run_trials(self, goal, result, feedback, cancelled):
+        """The RunTrials action: ``goal.n_trials`` trials, feedback after each; a cancel or
+        SIGINT stops before the next trial."""
         wait_for_services([self.robot_clients.step, self.robot_clients.reset], self.wait_timeout,
                           self.stop)
-        state = self.reset_robot_to(self.start_pose(request.start_offset))
-        self.learner.learn = not request.frozen
+        state = self.reset_robot_to(self.start_pose(goal.start_offset))
+        self.learner.learn = not goal.frozen
         errors, experience = [], []
-        for _ in range(request.n_trials):
+
+        def fill():       # the result of the trials run so far (all, or those before a cancel)
+            result.tracking_errors = errors
+            result.experience = to_matrix(np.vstack(experience) if experience
+                                          else np.zeros((0, 4 * self.robot.n_joints)))
+            result.sim_time = state.time
+
+        for _ in range(goal.n_trials):
             if self.stop.is_set():
                 raise ValueError(f"stopped (SIGINT/SIGTERM) after {len(errors)} trials")
+            if cancelled():
+                fill()
+                raise JobCancelled(f"after {len(errors)} of {goal.n_trials} trials (they stay "
+                                   "learned)")
             learned, rejected = self.learner.n_learned_, self.learner.n_rejected_
             trial = self.learner.run_trial(self.step, state, *self.trajectory,
                                            self.n_steps, self.dt)
@@ -163,11 +190,10 @@ class InverseDynamicsLearner(Node):
             experience.append(trial.samples)
             self.publish(trial, self.learner.n_learned_ - learned,
                          self.learner.n_rejected_ - rejected)
-        response.tracking_errors = errors
-        response.experience = to_matrix(np.vstack(experience) if experience
-                                        else np.zeros((0, 4 * self.robot.n_joints)))
-        response.sim_time = state.time
-        return (f"{request.n_trials} trials, tracking error "
+            feedback(trial=len(errors), n_trials=goal.n_trials,
+                     tracking_error=trial.tracking_error, sim_time=state.time)
+        fill()
+        return (f"{goal.n_trials} trials, tracking error "
                 + ", ".join(f"{1e3 * e:.1f}" for e in errors) + " mm")
 
     def start_pose(self, offset):
@@ -199,7 +225,9 @@ class InverseDynamicsLearner(Node):
 
 
 def main(args=None):
-    serve("inverse_dynamics_learner", InverseDynamicsLearner, args)
+    # multi-threaded: a cancel of the run_trials goal is heard while the trials run
+    serve("inverse_dynamics_learner", InverseDynamicsLearner, args,
+          executor_class=MultiThreadedExecutor)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from lpa_transfer.recording.bag import BagWriter
+from lpa_transfer.recording.bag import BagError, BagWriter
 from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
                                           init_with_stop_event, message_class, qos_from_offered,
                                           qos_to_dict)
@@ -54,6 +54,10 @@ class Recorder(Node):
         self.exclude = set(declare_array(self, "exclude", Parameter.Type.STRING_ARRAY,
                                          f"topics never recorded; unset: {DEFAULT_EXCLUDE}")
                            or DEFAULT_EXCLUDE)
+        self.include_hidden = declare(self, "include_hidden_topics", False,
+                                      "also record hidden topics (a name part starting with "
+                                      "'_', e.g. an action's /_action/feedback), as rosbag2's "
+                                      "--include-hidden-topics")
         self.qos_depth = declare(self, "qos_depth", 1000, "queue depth of each subscription",
                                  positive=True)
         period = declare(self, "discovery_period", 0.5,
@@ -66,13 +70,17 @@ class Recorder(Node):
             raise ValueError(f"cannot write the bag {output!r}: {exc.strerror or exc}") from None
         self.write_error = None   # the first failed write (OSError); the node then stops
         self.subscribed = {}  # topic -> type name
+        self.skipped = set()  # topics whose type could not be recorded (warned once)
         self.discover()
         self.discovery_timer = self.create_timer(period, self.discover)
         self.flush_timer = self.create_timer(FLUSH_PERIOD / 2, self.flush)
         self.get_logger().info(f"recording to {output}")
 
     def wanted(self, topic):
-        return (topic not in self.exclude and (not self.topics or topic in self.topics)
+        hidden = any(part.startswith("_") for part in topic.split("/"))
+        return (topic not in self.exclude and topic not in self.skipped
+                and (self.include_hidden or not hidden or topic in self.topics)
+                and (not self.topics or topic in self.topics)
                 and (self.topic_regex is None or self.topic_regex.search(topic)))
 
     def discover(self):
@@ -88,7 +96,13 @@ class Recorder(Node):
                 continue
             offered = [info.qos_profile for info in self.get_publishers_info_by_topic(topic)]
             if offered:
-                self.subscribe(topic, type_names[0], offered)
+                try:
+                    self.subscribe(topic, type_names[0], offered)
+                except (BagError, ImportError, AttributeError, ValueError) as exc:
+                    # a type the bag cannot describe (e.g. an action's messages): that topic
+                    # is left out, said once; the others are recorded
+                    self.skipped.add(topic)
+                    self.get_logger().warning(f"not recording {topic} [{type_names[0]}]: {exc}")
 
     def subscribe(self, topic, type_name, offered):
         self.bag.add_topic(topic, type_name, [qos_to_dict(qos) for qos in offered])

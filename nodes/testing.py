@@ -155,6 +155,20 @@ class ClientNode:
     def call(self, client, request, timeout=20.0):
         return call_service(self.executor, client, request, timeout)
 
+    def action_client(self, action_type, name):
+        """An rclpy ActionClient on this node."""
+        from rclpy.action import ActionClient
+
+        return ActionClient(self.node, action_type, name)
+
+    def run(self, client, goal, timeout=20.0, on_feedback=None):
+        """Send ``goal`` on the ActionClient ``client`` (waiting for its server first) and
+        spin until the result: the Result (``success``/``message`` as a service's answer)."""
+        from lpa_transfer_nodes._ros_util import run_action, wait_for_services
+
+        wait_for_services([client], timeout, threading.Event(), self.executor)
+        return run_action(self.executor, client, goal, timeout, on_feedback=on_feedback)
+
     def close(self):
         self.executor.shutdown()
         self.node.destroy_node()

@@ -11,7 +11,8 @@ from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, uniq
 
 from lpa_transfer.robots.kinematics import planar_forward_kinematics
 from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation
-from lpa_transfer_interfaces.srv import GoalBabble, InitialiseSensorimotor
+from lpa_transfer_interfaces.action import GoalBabble
+from lpa_transfer_interfaces.srv import InitialiseSensorimotor
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import Marker, MarkerArray
@@ -57,7 +58,7 @@ def learners(tmp_path_factory):
     def clients(namespace):
         prefix = f"/{namespace}/goal_babbling_learner"
         return (client.node.create_client(InitialiseSensorimotor, f"{prefix}/initialise"),
-                client.node.create_client(GoalBabble, f"{prefix}/babble"))
+                client.action_client(GoalBabble, f"{prefix}/babble"))
 
     try:
         yield client, clients("target"), clients("guarded"), received, nodes, (domain_id, work)
@@ -76,9 +77,9 @@ def reset(client, init, own=None, transferred=None, elapsed=0.0, seed=-1):
     return client.call(init, request, timeout=60)
 
 
-def babble(client, service, seconds, interval=0.0):
-    return client.call(service, GoalBabble.Request(seconds=seconds, evaluation_interval=interval),
-                       timeout=60)
+def babble(client, action, seconds, interval=0.0, on_feedback=None):
+    return client.run(action, GoalBabble.Goal(seconds=seconds, evaluation_interval=interval),
+                      timeout=60, on_feedback=on_feedback)
 
 
 def test_babbling_learns_from_what_the_robot_did(learners):
@@ -87,8 +88,12 @@ def test_babbling_learns_from_what_the_robot_did(learners):
     client.spin_until(lambda: received and math.isnan(received[-1].mean_error), timeout=10,
                       what="the reset's evaluation (an empty model)")
     before = len(received)
-    answer = babble(client, service, 30.0, 10.0)
+    feedback = []
+    answer = babble(client, service, 30.0, 10.0, feedback.append)
     assert answer.success, answer.message + nodes[1].log()
+    # the action's feedback: each evaluation as it is made, with the steps done
+    assert [(f.evaluation.learning_time, f.steps_done, f.n_steps) for f in feedback] == \
+        [(10.0, 100, 300), (20.0, 200, 300), (30.0, 300, 300)]
     times = [e.learning_time for e in answer.evaluations]
     assert times == pytest.approx([10.0, 20.0, 30.0])
     errors = [e.mean_error for e in answer.evaluations]
@@ -219,17 +224,21 @@ def test_sigint_stops_babbling_at_once(learners):
         reset_service="/target/robot_sim/reset") + ["-r", "__ns:=/stopping"],
         name="stopped_learner")
     try:
-        service = client.node.create_client(GoalBabble, "/stopping/goal_babbling_learner/babble")
-        client.spin_until(service.service_is_ready, timeout=20, what="the learner")
+        action = client.action_client(GoalBabble, "/stopping/goal_babbling_learner/babble")
+        client.spin_until(action.server_is_ready, timeout=20, what="the learner")
+        client.spin_for(0.5)                                  # discovery settles
         steps = []
         client.node.create_subscription(JointState, "/target/joint_states",
                                         steps.append, 100)
-        future = service.call_async(GoalBabble.Request(seconds=1000.0))   # 10 000 steps
+        sent = action.send_goal_async(GoalBabble.Goal(seconds=1000.0))   # 10 000 steps
+        handle = client.spin_until(lambda: sent.done() and sent.result(), timeout=20,
+                                   what="the goal accepted")
+        future = handle.get_result_async()
         client.spin_until(lambda: len(steps) >= 50, timeout=20, what="babbling under way")
         assert not future.done()
         os.killpg(learner.process.pid, signal.SIGINT)
         client.spin_until(future.done, timeout=5, what="the stopped babble's answer")
-        answer = future.result()
+        answer = future.result().result
         assert not answer.success and "stopped (SIGINT/SIGTERM) after" in answer.message
         # the one SIGINT also ends the node, cleanly (a second one, as stop() would send,
         # could land in its shutdown after rclpy restored the default handler: exit -2)
@@ -253,3 +262,32 @@ def test_a_learner_with_unknown_active_joints_does_not_start(tmp_path):
     learner.process.wait(timeout=30)
     assert learner.stop() == 1
     assert "joints must hold distinct joint indices in [0, 2)" in learner.log()
+
+
+def test_a_cancelled_babble_ends_at_the_next_step_and_keeps_what_it_learned(learners):
+    """GoalBabble is an action: cancelled after its first evaluation, the goal ends
+    canceled long before its 100 s, with the evaluations so far; the learner's clock shows
+    the steps done stay learned, and the next goal babbles on from there."""
+    from action_msgs.msg import GoalStatus
+
+    client, (init, action), _, _, nodes, _ = learners
+    assert reset(client, init).success, nodes[1].log()
+    feedback = []
+    sent = action.send_goal_async(GoalBabble.Goal(seconds=100.0, evaluation_interval=1.0),
+                                  feedback_callback=lambda m: feedback.append(m.feedback))
+    handle = client.spin_until(lambda: sent.done() and sent.result(), timeout=30,
+                               what="the goal accepted")
+    client.spin_until(lambda: feedback, timeout=30, what="the first evaluation")
+    handle.cancel_goal_async()
+    done = handle.get_result_async()
+    outcome = client.spin_until(lambda: done.done() and done.result(), timeout=30,
+                                what="the cancelled goal's result")
+    assert outcome.status == GoalStatus.STATUS_CANCELED, outcome.result.message
+    result = outcome.result
+    assert not result.success and result.message.startswith("cancelled: after ")
+    assert 1 <= len(result.evaluations) < 100
+    clock = result.evaluations[-1].learning_time
+    after = babble(client, action, 1.0)
+    assert after.success, after.message
+    assert after.evaluations[-1].learning_time > clock            # it babbled on from there
+    assert after.evaluations[-1].learning_time < 50.0

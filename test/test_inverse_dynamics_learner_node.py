@@ -8,7 +8,8 @@ from conftest import ROOT
 from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 from lpa_transfer_interfaces.msg import TrialResult
-from lpa_transfer_interfaces.srv import InitialiseLearner, RunTrials
+from lpa_transfer_interfaces.action import RunTrials
+from lpa_transfer_interfaces.srv import InitialiseLearner
 from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
 
 PINCHER = ROOT / "scenarios" / "robots" / "pincher_arm.toml"
@@ -31,7 +32,7 @@ def learner(tmp_path_factory):
     client = ClientNode(domain_id, "learner_test_client")
     results = []
     client.node.create_subscription(TrialResult, "/pincher/trial_result", results.append, 10)
-    run = client.node.create_client(RunTrials, "/pincher/inverse_dynamics_learner/run_trials")
+    run = client.action_client(RunTrials, "/pincher/inverse_dynamics_learner/run_trials")
     init = client.node.create_client(InitialiseLearner,
                                      "/pincher/inverse_dynamics_learner/initialise")
     try:
@@ -44,10 +45,16 @@ def learner(tmp_path_factory):
 
 def test_learning_online_beats_pid_alone(learner):
     client, run, _, results, nodes = learner
-    pid_only = client.call(run, RunTrials.Request(n_trials=1, frozen=True), timeout=120)
+    pid_only = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
     assert pid_only.success, pid_only.message + nodes[1].log()
-    learned = client.call(run, RunTrials.Request(n_trials=2), timeout=120)
+    feedback = []
+    learned = client.run(run, RunTrials.Goal(n_trials=2), timeout=120,
+                         on_feedback=feedback.append)
     assert learned.success, learned.message
+    # the action's feedback after each trial: its count and error, the robot's time
+    assert [(f.trial, f.n_trials) for f in feedback] == [(1, 2), (2, 2)]
+    assert [f.tracking_error for f in feedback] == list(learned.tracking_errors)
+    assert feedback[-1].sim_time == pytest.approx(learned.sim_time)
     assert len(learned.tracking_errors) == 2
     # measured: PID alone 32 mm; learning online 10 mm in its first trial, 4 mm in its second
     assert learned.tracking_errors[1] < 0.5 * pid_only.tracking_errors[0]
@@ -74,7 +81,7 @@ def test_initialise_rejects_bad_samples_and_keeps_serving(learner):
     answer = client.call(init, InitialiseLearner.Request(samples=to_matrix(samples), reset=True))
     assert answer.success, answer.message
     assert (answer.n_learned, answer.n_rejected) == (4, 2)
-    again = client.call(run, RunTrials.Request(n_trials=1, frozen=True), timeout=120)
+    again = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
     assert again.success and len(again.tracking_errors) == 1
 
 
@@ -82,7 +89,7 @@ def test_run_trials_starts_from_the_offset_pose_and_refuses_bad_offsets(learner)
     """A seeded run's start (RunTrials.start_offset): the centre pose moved joint by joint;
     a wrong length, NaN or a pose outside the joint limits is refused, and the node serves on."""
     client, run, init, _, _ = learner
-    frozen = lambda offset: client.call(run, RunTrials.Request(   # noqa: E731
+    frozen = lambda offset: client.run(run, RunTrials.Goal(   # noqa: E731
         n_trials=1, frozen=True, start_offset=offset), timeout=120)
     for offset, message in (([0.01, 0.0], "needs 4 finite joint values"),
                             ([0.0, float("nan"), 0.0, 0.0], "needs 4 finite joint values"),
@@ -97,3 +104,33 @@ def test_run_trials_starts_from_the_offset_pose_and_refuses_bad_offsets(learner)
     assert moved.tracking_errors[0] > centre.tracking_errors[0]   # starts off the path
     q0 = from_matrix(moved.experience, "experience")[0, :4]
     assert q0 == pytest.approx([0.0, 0.65, 0.85, 0.6], abs=0.03)
+
+
+def test_a_cancelled_goal_stops_between_trials_and_the_next_is_served(learner):
+    """RunTrials is an action: a cancel sent after the first trial's feedback ends the goal
+    canceled after that trial (not after all 5); a second goal while one runs is rejected;
+    initialise is refused meanwhile; the learner then serves the next goal."""
+    from action_msgs.msg import GoalStatus
+
+    client, run, init, _, nodes = learner
+    client.run(run, RunTrials.Goal(n_trials=0), timeout=60)     # server up, discovery done
+    feedback = []
+    sent = run.send_goal_async(RunTrials.Goal(n_trials=5), feedback_callback=feedback.append)
+    handle = client.spin_until(lambda: sent.done() and sent.result(), timeout=30,
+                               what="the goal accepted")
+    assert handle.accepted
+    second = run.send_goal_async(RunTrials.Goal(n_trials=1))
+    assert not client.spin_until(lambda: second.done() and second.result(), timeout=30,
+                                 what="the second goal answered").accepted
+    busy = client.call(init, InitialiseLearner.Request(samples=to_matrix(np.zeros((0, 16)))))
+    assert not busy.success and "run_trials goal is running" in busy.message
+    client.spin_until(lambda: feedback, timeout=60, what="the first trial's feedback")
+    handle.cancel_goal_async()
+    done = handle.get_result_async()
+    outcome = client.spin_until(lambda: done.done() and done.result(), timeout=60,
+                                what="the cancelled goal's result")
+    assert outcome.status == GoalStatus.STATUS_CANCELED
+    assert not outcome.result.success and outcome.result.message.startswith("cancelled")
+    assert 1 <= len(outcome.result.tracking_errors) < 5, outcome.result.message
+    after = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
+    assert after.success, after.message + nodes[1].log()

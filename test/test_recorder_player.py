@@ -281,3 +281,33 @@ def test_a_sigkilled_recorder_loses_at_most_the_last_flush_period(ros_node, tmp_
         except Exception:   # the file ends mid-record: everything before it was read
             pass
     assert independent >= len(due)
+
+
+def test_hidden_topics_are_left_out_and_an_unrecordable_type_is_skipped(ros_node, tmp_path):
+    """As rosbag2: hidden topics (an action's /_action/...) are not recorded by default. With
+    include_hidden_topics, a topic whose type the bag cannot describe (an action's feedback
+    message, which has no .msg file) is skipped with one warning; the recorder records the
+    rest and exits 0 (it used to die with a traceback)."""
+    from std_msgs.msg import String
+    from lpa_transfer_interfaces.action import RunTrials
+
+    feedback_type = RunTrials.Impl.FeedbackMessage
+    for include, expected in ((False, {"/visible"}), (True, {"/visible", "/robot/_hidden"})):
+        domain_id, output = unique_domain_id(), tmp_path / f"hidden_{include}.mcap"
+        test = ros_node(domain_id)
+        publishers = [test.node.create_publisher(String, "/visible", 10),
+                      test.node.create_publisher(String, "/robot/_hidden", 10),
+                      test.node.create_publisher(feedback_type, "/robot/_action/feedback", 10)]
+        recorder = NodeProcess("recorder", domain_id, tmp_path / f"log_{include}",
+                               ros_params(output=output, discovery_period=0.1,
+                                          include_hidden_topics=include))
+        wait_until(lambda: publishers[0].get_subscription_count(), what="the recording")
+        test.spin_for(0.5)                         # a few discovery scans
+        for publisher in publishers[:2]:
+            publisher.publish(String(data="x"))
+        test.spin_for(0.5)
+        assert recorder.stop(signal.SIGINT) == 0, recorder.log()
+        assert set(bag.summary(output)) == expected
+        warned = "not recording /robot/_action/feedback" in recorder.log()
+        assert warned == include, recorder.log()
+        assert "Traceback" not in recorder.log()

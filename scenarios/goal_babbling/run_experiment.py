@@ -50,8 +50,9 @@ from lpa_transfer.goal_babbling.experiment import derived_seeds  # noqa: E402
 from lpa_transfer.goal_babbling.report import write_outputs  # noqa: E402
 from lpa_transfer.goal_babbling.transfer import padded_rows  # noqa: E402
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
-from lpa_transfer_interfaces.srv import (FitModel, GoalBabble,  # noqa: E402
-                                         InitialiseSensorimotor, TransferPoints)
+from lpa_transfer_interfaces.action import GoalBabble  # noqa: E402
+from lpa_transfer_interfaces.srv import (FitModel, InitialiseSensorimotor,  # noqa: E402
+                                         TransferPoints)
 from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
                                           describe_use_sim_time, from_matrix, run_job,
                                           to_matrix, wait_for_services)
@@ -143,13 +144,23 @@ class Experiment(Node):
                            own=to_matrix(empty if own is None else own),
                            transferred=to_matrix(empty if transferred is None else transferred))
         evaluations = [answer.evaluation] if own is not None else []
-        babbled = self.call(GoalBabble, f"{learner}/babble", seconds=float(seconds),
-                            evaluation_interval=self.interval)
+        babbled = self.calls.run(GoalBabble, f"{learner}/babble", self.on_feedback(learner),
+                                 seconds=float(seconds), evaluation_interval=self.interval)
         evaluations += list(babbled.evaluations)
         return ([e.learning_time for e in evaluations], [e.mean_error for e in evaluations],
                 [e.reaching_rate for e in evaluations], [e.n_transferred_samples
                                                          for e in evaluations],
                 from_matrix(babbled.experience, "experience"))
+
+    def on_feedback(self, learner):
+        """Progress: the babble action's feedback at every evaluation, logged."""
+        def log(feedback):
+            e = feedback.evaluation
+            self.get_logger().info(
+                f"{learner}: t = {e.learning_time:g} s ({feedback.steps_done}/"
+                f"{feedback.n_steps} steps), reaching rate {100 * e.reaching_rate:.1f} %, "
+                f"mean error {1e3 * e.mean_error:.1f} mm")
+        return log
 
     def transferred(self, model_id, source_experience):
         """ξ̂_t: the source's (q̄, x_s) through the model, padded with the target's home."""
@@ -168,8 +179,9 @@ class Experiment(Node):
     def run(self, pair_files):
         services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
         services += ["/target/guarded_learner/babble"] if self.guarded else []
-        wait_for_services([self.calls.client(FitModel if s.endswith("fit") else GoalBabble, s)
-                           for s in services], 60, self.stop, self.spinner)
+        wait_for_services([self.calls.client(FitModel, s) if s.endswith("fit")
+                           else self.calls.action_client(GoalBabble, s) for s in services],
+                          60, self.stop, self.spinner)
         curves = {}
         for seed, pair_file in zip(self.seeds, pair_files):
             source_seed, target_seed, lpa_seed, after_transfer_seed = derived_seeds(seed)

@@ -56,7 +56,8 @@ from lpa_transfer.inverse_dynamics.report import (SETTINGS, summary_lines,  # no
                                                   write_outputs)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
-from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner, RunTrials,  # noqa: E402
+from lpa_transfer_interfaces.action import RunTrials  # noqa: E402
+from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner,  # noqa: E402
                                          TransferPoints)
 from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
                                           describe_use_sim_time, from_matrix, run_job,
@@ -131,8 +132,11 @@ class Experiment(Node):
     def on_trial(self, msg):
         if self.recording is not None:
             self.recording.append(msg)
-            print(f"  {self.current}: trial {msg.trial}/{self.n_trials} tracking error "
-                  f"{1e3 * msg.tracking_error:.2f} mm", flush=True)
+
+    def on_feedback(self, feedback):
+        """Progress: the run_trials action's feedback after every trial."""
+        print(f"  {self.current}: trial {feedback.trial}/{feedback.n_trials} tracking error "
+              f"{1e3 * feedback.tracking_error:.2f} mm", flush=True)
 
     # -- one learner run --------------------------------------------------------------------
     def learn(self, robot, star, initial_data, start_offset=()):
@@ -142,8 +146,9 @@ class Experiment(Node):
         self.call(InitialiseLearner, f"{learner}/initialise", samples=to_matrix(initial_data),
                   reset=True)
         self.recording = []
-        answer = self.call(RunTrials, f"{learner}/run_trials", n_trials=self.n_trials,
-                           start_offset=[float(v) for v in start_offset])
+        answer = self.calls.run(RunTrials, f"{learner}/run_trials", self.on_feedback,
+                                n_trials=self.n_trials,
+                                start_offset=[float(v) for v in start_offset])
         deadline = time.monotonic() + 5
         while len(self.recording) < self.n_trials and time.monotonic() < deadline:
             self.spinner.spin_once(timeout_sec=0.05)
@@ -174,7 +179,7 @@ class Experiment(Node):
                 self.get_logger().info(answer.message)
 
     def run(self, pair_files):
-        wait_for_services([self.client(RunTrials, f"/{r}/{s}/run_trials")
+        wait_for_services([self.calls.action_client(RunTrials, f"/{r}/{s}/run_trials")
                            for r in self.robots for s in self.stars]
                           + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop,
                           self.spinner)
