@@ -23,6 +23,7 @@ import threading
 import time
 
 from rclpy.duration import Duration
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
@@ -138,16 +139,26 @@ class Player(Node):
         return published
 
     def play(self):
-        if not (self.sleep(self.start_delay)):
-            return
-        if self.min_subscribers > 0:
-            self.wait_for_subscribers()
-        if self.clock_pub is not None:
-            threading.Thread(target=self.publish_clock, daemon=True).start()
+        # the node answers its services (parameters) while it waits and plays
+        self.spinner = SingleThreadedExecutor()
+        self.spinner.add_node(self)
+        spinning = threading.Thread(target=self.spin_until_finished, daemon=True)
+        spinning.start()
         try:
+            if not (self.sleep(self.start_delay)):
+                return
+            if self.min_subscribers > 0:
+                self.wait_for_subscribers()
+            if self.clock_pub is not None:
+                threading.Thread(target=self.publish_clock, daemon=True).start()
             self.play_passes()
         finally:
             self.finished.set()
+            spinning.join()
+
+    def spin_until_finished(self):
+        while not self.finished.is_set() and not self.stop.is_set():
+            self.spinner.spin_once(timeout_sec=0.1)
 
     def play_passes(self):
         while True:

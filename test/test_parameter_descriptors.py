@@ -54,6 +54,20 @@ def script(path, *extra, **params):
                                                  [*extra, *ros_params(**params)])
 
 
+def player(domain_id, work):
+    """A player of a one-message bag that waits (60 s) for a subscriber nobody starts."""
+    from lpa_transfer.recording.bag import BagWriter
+    from rclpy.serialization import serialize_message
+    from std_msgs.msg import String
+
+    path = work / "one.mcap"
+    writer = BagWriter(path)
+    writer.add_topic("/chatter", "std_msgs/msg/String")
+    writer.write("/chatter", serialize_message(String(data="hello")), 1)
+    writer.close()
+    return NodeProcess("player", domain_id, work, ros_params(input=path, wait_timeout=60.0))
+
+
 #: (node name, how to start it, parameters it must have among others). The job nodes wait
 #: (for robots, learners or demonstrations that are not there) long enough to be asked.
 NODES = {
@@ -101,6 +115,11 @@ NODES = {
                robot_files="[scenarios/robots/youbot_arm.toml, scenarios/robots/pincher_arm.toml]"),
         {"robots", "robot_files", "targets", "seeds", "conditions", "n_trials", "latent_dim",
          "start_noise", "interpolation", "babbling_line_samples", "call_timeout"}),
+    "recorder": ("/recorder", lambda domain_id, work: NodeProcess(
+        "recorder", domain_id, work, ros_params(output=work / "run.mcap")),
+        {"output", "topics", "topic_regex", "exclude", "include_hidden_topics", "qos_depth"}),
+    "player": ("/player", player, {"input", "rate", "loop", "wait_for_subscribers",
+                                   "wait_timeout", "clock"}),
     "goal_babbling_experiment": (
         "/experiment",
         script("scenarios/goal_babbling/run_experiment.py", "guided_0.npz", **GOAL_BABBLING),
