@@ -15,6 +15,7 @@ the service's message.
     model_ids, quarantined_ids = mapping.list()
 """
 import json
+import threading
 from collections import namedtuple
 
 import numpy as np
@@ -22,7 +23,8 @@ import rclpy
 
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+from lpa_transfer_nodes._ros_util import (call_service, from_matrix, to_matrix,
+                                          wait_for_services)
 
 #: FitModel's hyperparameters a caller may set (0 or empty: the service's default; see
 #: lpa_mapping).
@@ -46,10 +48,14 @@ ModelList = namedtuple("ModelList", ("model_ids", "quarantined_ids"))
 
 class MappingClient:
     """Blocking calls to a running ``lpa_mapping`` node from ``node`` (an rclpy Node that
-    this client spins while it waits; do not spin it elsewhere at the same time)."""
+    this client spins while it waits; do not spin it elsewhere at the same time).
 
-    def __init__(self, node, service="/lpa_mapping", timeout=60.0):
-        self.node = node
+    ``executor``: the executor ``node`` is already in (a job node's own, as the scenario
+    experiments have); the client then waits by spinning it, and ``stop`` (a
+    threading.Event, e.g. set on SIGINT) ends a wait early."""
+
+    def __init__(self, node, service="/lpa_mapping", timeout=60.0, executor=None, stop=None):
+        self.node, self.executor, self.stop = node, executor, stop
         self.timeout = float(timeout)
         self._clients = {name: node.create_client(srv_type, f"{service}/{name}")
                          for name, srv_type in (("fit", FitModel), ("transfer", TransferPoints),
@@ -106,17 +112,27 @@ class MappingClient:
         """Delete the model ``model_id`` (its file too); returns the service's message."""
         return self._call("delete", DeleteModel.Request(model_id=model_id)).message
 
+    def client(self, name):
+        """The rclpy client of the service ``name`` (fit, transfer, describe, list, delete),
+        e.g. to wait for it with others."""
+        return self._clients[name]
+
     def _call(self, name, request):
         client = self._clients[name]
-        if not client.wait_for_service(timeout_sec=self.timeout):
-            raise RuntimeError(f"{client.srv_name} is not available (is lpa_mapping running "
-                               f"on this ROS_DOMAIN_ID?)")
-        future = client.call_async(request)
-        rclpy.spin_until_future_complete(self.node, future, timeout_sec=self.timeout)
-        if not future.done():
-            client.remove_pending_request(future)
-            raise RuntimeError(f"{client.srv_name} did not answer within {self.timeout} s")
-        answer = future.result()
+        if self.executor is not None:     # a job node's executor: the project's waits
+            stop = self.stop or threading.Event()
+            wait_for_services([client], self.timeout, stop, self.executor)
+            answer = call_service(self.executor, client, request, self.timeout, stop)
+        else:
+            if not client.wait_for_service(timeout_sec=self.timeout):
+                raise RuntimeError(f"{client.srv_name} is not available (is lpa_mapping "
+                                   f"running on this ROS_DOMAIN_ID?)")
+            future = client.call_async(request)
+            rclpy.spin_until_future_complete(self.node, future, timeout_sec=self.timeout)
+            if not future.done():
+                client.remove_pending_request(future)
+                raise RuntimeError(f"{client.srv_name} did not answer within {self.timeout} s")
+            answer = future.result()
         if not answer.success:
             raise RuntimeError(f"{client.srv_name} refused the request: {answer.message}")
         return answer

@@ -51,11 +51,11 @@ from lpa_transfer.goal_babbling.report import write_outputs  # noqa: E402
 from lpa_transfer.goal_babbling.transfer import padded_rows  # noqa: E402
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.action import GoalBabble  # noqa: E402
-from lpa_transfer_interfaces.srv import (FitModel, InitialiseSensorimotor,  # noqa: E402
-                                         TransferPoints)
+from lpa_transfer_interfaces.srv import InitialiseSensorimotor  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
                                           describe_use_sim_time, from_matrix, run_job,
                                           to_matrix, wait_for_services)
+from lpa_transfer_nodes.mapping_client import MappingClient  # noqa: E402
 
 THESIS = ("thesis §6.5.1 (Fig. 6-6/6-7, read from the text): transfer boosts learning at "
           "once; LPA helps the final performance when applied at 180 s and beyond, and "
@@ -132,6 +132,8 @@ class Experiment(Node):
         self.spinner.add_node(self)
         self.calls = ServiceCalls(self, self.spinner, call_timeout, stop)
         self.call = self.calls.call
+        self.mapping = MappingClient(self, timeout=call_timeout, executor=self.spinner,
+                                     stop=stop)
         self.seeds_done = []
 
     # -- one learner run ---------------------------------------------------------------------
@@ -167,10 +169,7 @@ class Experiment(Node):
         n_source = self.robots["source"].n_joints
         rows = np.hstack((source_experience[:, self.joints["source"]],
                           source_experience[:, n_source:]))
-        mapped = from_matrix(self.call(TransferPoints, "/lpa_mapping/transfer",
-                                       model_id=model_id, source=to_matrix(rows)).target,
-                             "target")
-        return self.padded(mapped)
+        return self.padded(self.mapping.transfer(model_id, rows))
 
     def padded(self, rows):
         """Rows (q̄, x) of the target as (q, x): the joints outside q̄ at the target's home."""
@@ -179,7 +178,7 @@ class Experiment(Node):
     def run(self, pair_files):
         services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
         services += ["/target/guarded_learner/babble"] if self.guarded else []
-        wait_for_services([self.calls.client(FitModel, s) if s.endswith("fit")
+        wait_for_services([self.mapping.client("fit") if s.endswith("fit")
                            else self.calls.action_client(GoalBabble, s) for s in services],
                           60, self.stop, self.spinner)
         curves = {}
@@ -206,10 +205,11 @@ class Experiment(Node):
                 for method in self.methods:
                     model_id = f"seed{seed}/T{guided:g}/{method}"
                     fields = dict(self.fit, random_state=lpa_seed) if method == "lpa" else {}
-                    self.call(FitModel, "/lpa_mapping/fit", model_id=model_id, method=method,
-                              latent_dim=self.fit["latent_dim"], source=to_matrix(source_pairs),
-                              target=to_matrix(target_pairs),
-                              **{k: v for k, v in fields.items() if k != "latent_dim"})
+                    self.mapping.fit(model_id, source_pairs, target_pairs, method=method,
+                                     latent_dim=self.fit["latent_dim"],
+                                     source_robot=self.robots["source"].name,
+                                     target_robot=self.robots["target"].name,
+                                     **{k: v for k, v in fields.items() if k != "latent_dim"})
                     transferred = self.transferred(model_id, experience)
                     for guarded in (False, True) if self.guarded else (False,):
                         learner = "/target/guarded_learner" if guarded else "/target/learner"

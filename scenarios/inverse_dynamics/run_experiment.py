@@ -57,11 +57,11 @@ from lpa_transfer.inverse_dynamics.report import (SETTINGS, summary_lines,  # no
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.action import RunTrials  # noqa: E402
-from lpa_transfer_interfaces.srv import (FitModel, InitialiseLearner,  # noqa: E402
-                                         TransferPoints)
+from lpa_transfer_interfaces.srv import InitialiseLearner  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
                                           describe_use_sim_time, from_matrix, run_job,
                                           to_matrix, wait_for_services)
+from lpa_transfer_nodes.mapping_client import MappingClient  # noqa: E402
 
 
 class Experiment(Node):
@@ -121,6 +121,8 @@ class Experiment(Node):
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
         self.calls = ServiceCalls(self, self.spinner, self.timeout, stop)
+        self.mapping = MappingClient(self, timeout=self.timeout, executor=self.spinner,
+                                     stop=stop)
         self.client, self.call = self.calls.client, self.calls.call
         self.traces = {}
         for robot in self.robots:
@@ -157,9 +159,7 @@ class Experiment(Node):
                 messages)
 
     def transfer(self, model_id, points):
-        answer = self.call(TransferPoints, "/lpa_mapping/transfer", model_id=model_id,
-                           source=to_matrix(points))
-        return from_matrix(answer.target, "target")
+        return self.mapping.transfer(model_id, points)
 
     def fit_models(self, seed, pairs, methods):
         """PA and/or LPA (``methods``) towards every target robot; model ids like
@@ -173,15 +173,15 @@ class Experiment(Node):
                 if method == "lpa":
                     fields.update(n_min=self.fit["n_min"], c_min=self.fit["c_min"],
                                   cluster_dims=list(range(2 * self.n_joints[source])))
-                answer = self.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
-                                   method=method, source=to_matrix(pairs[source]),
-                                   target=to_matrix(pairs[target]), **fields)
+                answer = self.mapping.fit(model_id, pairs[source], pairs[target],
+                                          method=method, source_robot=source,
+                                          target_robot=target, **fields)
                 self.get_logger().info(answer.message)
 
     def run(self, pair_files):
         wait_for_services([self.calls.action_client(RunTrials, f"/{r}/{s}/run_trials")
                            for r in self.robots for s in self.stars]
-                          + [self.client(FitModel, "/lpa_mapping/fit")], 60, self.stop,
+                          + [self.mapping.client("fit")], 60, self.stop,
                           self.spinner)
         run = [c for c in CONDITIONS if c == "uninitialised" or c in self.conditions]
         curves = {f"{r}/{s}/{c}": [] for r in self.targets for s in self.stars for c in run}

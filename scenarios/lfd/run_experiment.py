@@ -49,10 +49,11 @@ from lpa_transfer.lfd.skills import (CONDITIONS, between, by_shape,  # noqa: E40
                                      mean_mapping_error, robot_ik_demonstrations)
 from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
-from lpa_transfer_interfaces.srv import FitModel, LearnSkill, TransferPoints  # noqa: E402
+from lpa_transfer_interfaces.srv import LearnSkill  # noqa: E402
 from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
                                           declare, describe_use_sim_time, from_matrix,
                                           run_job, to_matrix)
+from lpa_transfer_nodes.mapping_client import MappingClient  # noqa: E402
 from lpa_transfer_nodes.demonstration_source import (demonstration_msg,  # noqa: E402
                                                      demonstration_qos)
 
@@ -105,6 +106,8 @@ class Experiment(Node):
         self.spinner = SingleThreadedExecutor()
         self.spinner.add_node(self)
         self.calls = ServiceCalls(self, self.spinner, call_timeout, stop)
+        self.mapping = MappingClient(self, timeout=call_timeout, executor=self.spinner,
+                                     stop=stop)
 
     def on_demonstration(self, msg):
         self.received[(msg.shape, msg.index)] = Demonstration(
@@ -148,15 +151,13 @@ class Experiment(Node):
                                     target=to_matrix(target))
         batch.header.stamp, batch.header.frame_id = self.get_clock().now().to_msg(), "world"
         self.batch_pub.publish(batch)
-        fitted = self.calls.call(FitModel, "/lpa_mapping/fit", model_id=model_id,
-                                 source=to_matrix(source), target=to_matrix(target), **self.fit)
+        fitted = self.mapping.fit(model_id, source, target, source_robot=body.name,
+                                  target_robot=learner.robot.name, **self.fit)
         return tried, fitted.n_clusters
 
     def transfer(self, model_id, trajectories):
         """Each trajectory's rows (T, D_s), whole, through lpa_mapping: the mapped rows."""
-        return [from_matrix(self.calls.call(TransferPoints, "/lpa_mapping/transfer",
-                                            model_id=model_id, source=to_matrix(rows)).target,
-                            "target") for rows in trajectories]
+        return [self.mapping.transfer(model_id, rows) for rows in trajectories]
 
     def encoding(self, name, demos, joints, targets):
         """Skills of these joint trajectories executed on robot ``name``: ({shape: error},
