@@ -300,6 +300,20 @@ def long_job(node, action_type, name, handler, busy):
                         callback_group=ReentrantCallbackGroup())
 
 
+def unless_busy(busy, job, handler):
+    """``handler(request, response)`` for a service that changes what a long job (``job``,
+    e.g. "run_trials") works on: refused with a ValueError while ``busy`` (the job's lock,
+    :func:`long_job`) is held, else run holding it. Wrap it in :func:`answering`."""
+    def guarded(request, response):
+        if not busy.acquire(blocking=False):
+            raise ValueError(f"a {job} goal is running: call again after it (or cancel it)")
+        try:
+            return handler(request, response)
+        finally:
+            busy.release()
+    return guarded
+
+
 def run_action(executor, client, goal, timeout, stop=None, on_feedback=None):
     """Send ``goal`` to an action server and spin ``executor`` until its result arrives;
     returns the Result. ``on_feedback(feedback)`` sees each Feedback. After ``timeout`` s, or

@@ -47,7 +47,7 @@ from lpa_transfer_interfaces.msg import ReachingEvaluation
 from lpa_transfer_interfaces.action import GoalBabble
 from lpa_transfer_interfaces.srv import InitialiseSensorimotor
 from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, ServiceTimeout,
-                                          answering, long_job,
+                                          answering, long_job, unless_busy,
                                           call_service, declare, declare_array,
                                           describe_use_sim_time, from_matrix,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
@@ -162,7 +162,8 @@ class GoalBabblingLearner(Node):
                                                     EVALUATION_QOS)
         self.busy = threading.Lock()   # held while a babble goal runs
         self.create_service(InitialiseSensorimotor, "~/initialise",
-                            answering(self, "initialise", self.initialise))
+                            answering(self, "initialise",
+                                      unless_busy(self.busy, "babble", self.initialise)))
         self.babble_server = long_job(self, GoalBabble, "~/babble", self.babble, self.busy)
         self.get_logger().info(
             f"{self.robot.name}: goal babbling in X_bounds {self.x_bounds[0].tolist()} .. "
@@ -270,14 +271,6 @@ class GoalBabblingLearner(Node):
         return values[finite], int(np.count_nonzero(~finite))
 
     def initialise(self, request, response):
-        if not self.busy.acquire(blocking=False):
-            raise ValueError("a babble goal is running: initialise after it (or cancel it)")
-        try:
-            return self._initialise(request, response)
-        finally:
-            self.busy.release()
-
-    def _initialise(self, request, response):
         own, rejected_own = self.rows(request.own, "own")
         transferred, rejected_transferred = self.rows(request.transferred, "transferred")
         elapsed = request.elapsed

@@ -40,7 +40,7 @@ from lpa_transfer_interfaces.action import RunTrials
 from lpa_transfer_interfaces.srv import InitialiseLearner
 from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, answering, call_service,
                                           declare, declare_array, describe_use_sim_time,
-                                          from_matrix, long_job,
+                                          from_matrix, long_job, unless_busy,
                                           robot_resetter, robot_stepper, serve, sim_stamp,
                                           to_matrix, wait_for_services)
 from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_array,
@@ -96,7 +96,8 @@ class InverseDynamicsLearner(Node):
         self.publish_markers(sim_stamp(0.0))
         self.busy = threading.Lock()   # held while a run_trials goal runs
         self.create_service(InitialiseLearner, "~/initialise",
-                            answering(self, "initialise", self.initialise))
+                            answering(self, "initialise",
+                                      unless_busy(self.busy, "run_trials", self.initialise)))
         self.run_trials_server = long_job(self, RunTrials, "~/run_trials", self.run_trials,
                                           self.busy)
         self.get_logger().info(
@@ -140,14 +141,6 @@ class InverseDynamicsLearner(Node):
         return call_service(self.robot_clients.executor, client, request, self.call_timeout)
 
     def initialise(self, request, response):
-        if not self.busy.acquire(blocking=False):
-            raise ValueError("a run_trials goal is running: initialise after it (or cancel it)")
-        try:
-            return self._initialise(request, response)
-        finally:
-            self.busy.release()
-
-    def _initialise(self, request, response):
         samples = from_matrix(request.samples, "samples")
         if samples.shape[1] != 4 * self.robot.n_joints:
             raise ValueError(f"samples need 4 x {self.robot.n_joints} columns (q, q_dot, "
