@@ -322,7 +322,7 @@ def run_action(executor, client, goal, timeout, stop=None, on_feedback=None):
     name = client._action_name
     deadline = time.monotonic() + timeout
 
-    def wait(future, what):
+    def wait(future):
         while not future.done():
             stopped = stop is not None and stop.is_set()
             if stopped or time.monotonic() > deadline:
@@ -333,13 +333,13 @@ def run_action(executor, client, goal, timeout, stop=None, on_feedback=None):
     sent = client.send_goal_async(
         goal, feedback_callback=None if on_feedback is None
         else lambda message: on_feedback(message.feedback))
-    if (why := wait(sent, "acceptance")) is not None:
+    if (why := wait(sent)) is not None:
         raise ServiceTimeout(f"{why} while action {name} took the goal")
     handle = sent.result()
     if not handle.accepted:
         raise RuntimeError(f"action {name} rejected the goal (it runs one goal at a time)")
     answer = handle.get_result_async()
-    if (why := wait(answer, "result")) is not None:
+    if (why := wait(answer)) is not None:
         cancel, until = handle.cancel_goal_async(), time.monotonic() + 5.0
         while not cancel.done() and time.monotonic() < until:
             executor.spin_once(timeout_sec=0.05)
@@ -403,8 +403,8 @@ def spin_until_stopped(node, stop, executor_class=SingleThreadedExecutor):
             executor.spin_once(timeout_sec=0.2)
             if busy is not None and busy.locked():
                 # rclpy's executors hand a running job's task back at once, so this loop
-                # would spin hot and starve the job's thread of the GIL (a 5-trial run took
-                # 320 s instead of 30 s): poll every 10 ms instead (cancels, parameters)
+                # would spin hot and starve the job's thread of the GIL (bench/README.md,
+                # "run_trials as an action"): poll every 10 ms instead (cancels, parameters)
                 stop.wait(0.01)
         _drain(node, executor)
     except ExternalShutdownException:

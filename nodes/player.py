@@ -31,7 +31,8 @@ import yaml
 
 from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer_nodes._ros_util import (CLOCK_QOS, declare, declare_array,
-                                          describe_use_sim_time, message_class, qos_from_offered, run_job, sim_stamp)
+                                          describe_use_sim_time, message_class,
+                                          qos_from_offered, run_job, sim_stamp)
 
 
 def bag_topics(path):

@@ -17,7 +17,8 @@ time tracks wall time, with the latest command received on ``joint_commands``.
 Both modes publish ``joint_states``, ``end_effector`` and the link frames on ``/tf`` (frames
 ``<frame_prefix><link>``, the base fixed to ``world`` on ``/tf_static``) after each advance,
 stamped with the simulated time; the URDF goes out once, latched, on ``robot_description``
-(std_msgs/String), so Foxglove's 3-D panel or RViz draws the robot as simulated. And the time, and that time as a ``rosgraph_msgs/Clock`` on ``clock_topic`` (default
+(std_msgs/String), so Foxglove's 3-D panel or RViz draws the robot as simulated. The
+simulated time goes out as a ``rosgraph_msgs/Clock`` on ``clock_topic`` (default
 ``clock``: ``/clock`` for a robot in the root namespace, ``/<ns>/clock`` for a robot in a
 namespace — two lock-step robots advance independently, so each has its own clock). A node
 that stamps this robot's data runs with ``use_sim_time:=true`` and ``-r /clock:=<that topic>``,
@@ -114,9 +115,9 @@ class RobotSim(Node):
             String(data=description))
         # /tf only while someone listens (a lock-step period costs less without it)
         self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if publish_tf else None
-        self.tf_static_pub = (self.create_publisher(TFMessage, "/tf_static", LATCHED_QOS)
-                              if publish_tf else None)
-        self._tf = self._tf_base = None
+        if publish_tf:
+            self.tf_static_pub = self.create_publisher(TFMessage, "/tf_static", LATCHED_QOS)
+            self.start_tf()
         mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
@@ -146,38 +147,44 @@ class RobotSim(Node):
             for values in (state.positions, state.velocities, state.efforts))
         return msg
 
-    def tf_messages(self, stamp):
-        """The robot's link frames (:meth:`RobotSimulator.link_frames`) at ``stamp``: the
-        world -> base link TransformStamped and a TFMessage of every link relative to its
-        parent. The messages are made once and updated in place, which costs less than new
-        ones at every lock-step period (bench/bench_control_period.py --no-tf)."""
-        frames = self.sim.link_frames()
-        if self._tf is None:
-            def transform(parent, child):
-                msg = TransformStamped(child_frame_id=self.frame_prefix + child)
-                msg.header.frame_id = WORLD_FRAME if parent is None else self.frame_prefix + parent
-                return msg
-            self._tf_base = transform(*frames[0][:2])
-            self._tf = TFMessage(transforms=[transform(*frame[:2]) for frame in frames[1:]])
-        for msg, (_, _, translation, rotation) in zip([self._tf_base, *self._tf.transforms],
-                                                      frames):
-            msg.header.stamp = stamp
-            vector, quaternion = msg.transform.translation, msg.transform.rotation
-            vector.x, vector.y, vector.z = (float(v) for v in translation)
-            quaternion.x, quaternion.y, quaternion.z, quaternion.w = (float(v) for v in rotation)
-        return self._tf_base, self._tf
+    def transform(self, parent, child):
+        """An empty TransformStamped from ``parent`` (None: the world) to ``child``."""
+        msg = TransformStamped(child_frame_id=self.frame_prefix + child)
+        msg.header.frame_id = WORLD_FRAME if parent is None else self.frame_prefix + parent
+        return msg
+
+    @staticmethod
+    def set_transform(msg, stamp, translation, rotation):
+        msg.header.stamp = stamp
+        vector, quaternion = msg.transform.translation, msg.transform.rotation
+        vector.x, vector.y, vector.z = (float(v) for v in translation)
+        quaternion.x, quaternion.y, quaternion.z, quaternion.w = (float(v) for v in rotation)
+
+    def start_tf(self):
+        """Latch the world -> base link transform on /tf_static (the base is fixed) and make
+        the TFMessage of the links that :meth:`tf_links` updates."""
+        (_, base, translation, rotation), *links = self.sim.link_frames()
+        static = self.transform(None, base)
+        self.set_transform(static, sim_stamp(self.sim.time), translation, rotation)
+        self.tf_static_pub.publish(TFMessage(transforms=[static]))
+        self._tf = TFMessage(transforms=[self.transform(parent, child)
+                                         for parent, child, _, _ in links])
+
+    def tf_links(self, stamp):
+        """Every link relative to its parent (:meth:`RobotSimulator.link_frames`) at
+        ``stamp``: one TFMessage, made once and updated in place, which costs less than new
+        messages at every lock-step period (bench/bench_control_period.py --no-tf)."""
+        for msg, (_, _, translation, rotation) in zip(self._tf.transforms,
+                                                      self.sim.link_frames()[1:]):
+            self.set_transform(msg, stamp, translation, rotation)
+        return self._tf
 
     def publish(self, state):
         joint_state = self.joint_state(state)
         if self.clock_pub is not None:
             self.clock_pub.publish(Clock(clock=joint_state.header.stamp))
-        if self.tf_pub is not None and (self.tf_static_pub is not None
-                                        or self.tf_pub.get_subscription_count()):
-            base, links = self.tf_messages(joint_state.header.stamp)
-            if self.tf_static_pub is not None:   # the base is fixed to the world: latched, once
-                self.tf_static_pub.publish(TFMessage(transforms=[base]))
-                self.tf_static_pub = None
-            self.tf_pub.publish(links)
+        if self.tf_pub is not None and self.tf_pub.get_subscription_count():
+            self.tf_pub.publish(self.tf_links(joint_state.header.stamp))
         self.joint_state_pub.publish(joint_state)
         point = PointStamped()
         point.header.stamp, point.header.frame_id = joint_state.header.stamp, WORLD_FRAME

@@ -6,8 +6,8 @@ Each ``robot_sim`` publishes its URDF on ``/<robot>/robot_description``, the bas
 poses, as a TF listener would; :func:`render` draws each robot as a stick figure (a line from
 every link frame's parent to it) with its end effector's recent path and the latest task
 markers of its learners (``/<robot>/.../task_markers``: lines and point lists), one panel per
-robot, so
-that a run can be looked at without Foxglove and the picture checks what Foxglove would show.
+robot, so that a run can be looked at without Foxglove and the picture checks what Foxglove
+would show.
 
 The simulator's world has gravity along -y (``lpa_transfer.robots.planar_chain``): the
 figure draws y upwards.
@@ -69,14 +69,14 @@ def robot_poses(path, at=None, trail=10.0):
     """Each robot of the bag at simulated time ``at`` (s; default: its last state):
     ``{robot: dict(time, urdf, frames={frame: (parent, pose)}, trail=(N, 3), markers)}``,
     ``trail`` the end effector's positions over the ``trail`` seconds before, ``markers`` the
-    LINE_STRIP and SPHERE_LIST markers of the robot's latest task_markers arrays. BagError when the bag has
-    no robot_description, or a robot no transforms up to ``at``."""
-    robots = sorted(m.group("robot") for topic in summary(path)
-                    if (m := DESCRIPTION.match(topic)))
+    LINE_STRIP and SPHERE_LIST markers of the robot's latest task_markers arrays. BagError
+    when the bag has no robot_description, or a robot no transforms up to ``at``."""
+    recorded = summary(path)
+    robots = sorted(m.group("robot") for topic in recorded if (m := DESCRIPTION.match(topic)))
     if not robots:
         raise BagError(f"{path}: no /<robot>/robot_description topic: nothing to draw (was "
                        "robot_sim's publish_tf on and the topic recorded?)")
-    marker_topics = [topic for topic in summary(path) if (m := MARKERS.match(topic))
+    marker_topics = [topic for topic in recorded if (m := MARKERS.match(topic))
                      and m.group("robot") in robots]
     topics = ["/tf", "/tf_static", *(f"/{r}/robot_description" for r in robots),
               *(f"/{r}/end_effector" for r in robots), *marker_topics]
