@@ -17,6 +17,7 @@ so a joint's ``armature`` is written as an extension element ``<lpa:armature val
 included, ignore; :class:`lpa_transfer.robots.simulator.RobotSimulator` reads it back with
 :func:`urdf_joint_armatures` and applies both (its module docstring says how).
 """
+import weakref
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
@@ -47,37 +48,63 @@ def _transform(xyz, rpy):
     return transform
 
 
-def _axis_rotations(axis, angles):
-    """Rot(axis, q) for each q (N, 4, 4): R = I + sin q K + (1 − cos q) K² (Rodrigues)."""
-    x, y, z = axis
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+_EYE4 = np.eye(4)
+#: Per robot (RobotParams is immutable), the chain's constant parts: computed once, because
+#: inverse kinematics calls the forward kinematics thousands of times on a few rows each.
+_CHAINS = weakref.WeakKeyDictionary()
+
+
+def _chain(robot):
+    """(base, joint origins, Rodrigues' K and K² per joint axis, tool) of ``robot``."""
+    chain = _CHAINS.get(robot)
+    if chain is None:
+        ks = [np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+              for x, y, z in robot.joint_axes]
+        chain = (_transform(robot.base_xyz, robot.base_rpy),
+                 [_transform(xyz, rpy) for xyz, rpy in zip(robot.joint_xyz, robot.joint_rpy)],
+                 ks, [k @ k for k in ks], _transform(robot.tool_xyz, robot.tool_rpy))
+        _CHAINS[robot] = chain
+    return chain
+
+
+def _axis_rotations(k, kk, angles):
+    """Rot(axis, q) for each q (N, 4, 4): R = I + sin q K + (1 − cos q) K² (Rodrigues), with
+    K the axis' cross-product matrix and kk = K²."""
     s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
-    rotations = np.tile(np.eye(4), (len(angles), 1, 1))
-    rotations[:, :3, :3] += s * k + (1 - c) * (k @ k)
+    rotations = np.empty((len(angles), 4, 4))
+    rotations[:] = _EYE4
+    rotations[:, :3, :3] += s * k + (1 - c) * kk
     return rotations
+
+
+def _frames(robot, q, every):
+    """The world frames of the chain for ``q`` (N, n): every joint's and the tool's (a list),
+    or, unless ``every``, only the tool's."""
+    q = as_matrix(q, "q")
+    if q.shape[1] != robot.n_joints:
+        raise ValueError(f"q must have shape (N, {robot.n_joints}) (one row of joint angles per "
+                         f"sample), got shape {q.shape}")
+    base, origins, ks, kks, tool = _chain(robot)
+    frame = np.broadcast_to(base, (len(q), 4, 4))
+    frames = []
+    for i, origin in enumerate(origins):
+        frame = frame @ origin @ _axis_rotations(ks[i], kks[i], q[:, i])
+        if every:
+            frames.append(frame)
+    frames.append(frame @ tool)
+    return frames
 
 
 def chain_frames(robot, q):
     """World frames (N, n + 1, 4, 4) of every joint (its origin, after its rotation q_i) and,
     last, of the tool, for joint angles ``q`` (N, n): the partial products of the chain in
     the module docstring (e.g. to measure link lengths or compare two arms' postures)."""
-    q = as_matrix(q, "q")
-    if q.shape[1] != robot.n_joints:
-        raise ValueError(f"q must have shape (N, {robot.n_joints}) (one row of joint angles per "
-                         f"sample), got shape {q.shape}")
-    frame = np.tile(_transform(robot.base_xyz, robot.base_rpy), (len(q), 1, 1))
-    frames = []
-    for i in range(robot.n_joints):
-        origin = _transform(robot.joint_xyz[i], robot.joint_rpy[i])
-        frame = frame @ origin @ _axis_rotations(robot.joint_axes[i], q[:, i])
-        frames.append(frame)
-    frames.append(frame @ _transform(robot.tool_xyz, robot.tool_rpy))
-    return np.stack(frames, axis=1)
+    return np.stack(_frames(robot, q, every=True), axis=1)
 
 
 def tool_transforms(robot, q):
     """Homogeneous end-effector transforms T_tool(q) (N, 4, 4) in the world frame."""
-    return chain_frames(robot, q)[:, -1]
+    return _frames(robot, q, every=False)[-1]
 
 
 def forward_kinematics(robot, q):
