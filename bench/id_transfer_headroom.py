@@ -67,10 +67,16 @@ class StarRobot:
         self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
                                   initial_positions=self.kinematics.home)
 
-    def configure(self, config, name, star, time_law=None, lwpr=None):
-        """Issue 26's switches: the star legs' time law and LWPR hyperparameters replacing the
-        config's (``lwpr``, a dict)."""
+    def configure(self, config, name, star, time_law=None, lwpr=None, actuator=None):
+        """Issue 26's switches: the star legs' time law, LWPR hyperparameters replacing the
+        config's (``lwpr``, a dict) and the simulator's actuator (``"torque"`` or
+        ``"velocity_motor"``, V-REP's torque mode; lpa_transfer.robots.simulator)."""
         node = config[f"/{name}/{star}"]["ros__parameters"]
+        if actuator is not None and actuator != self.sim.actuator:
+            physics_step = self.sim.physics_step
+            self.sim.close()
+            self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
+                                      initial_positions=self.kinematics.home, actuator=actuator)
         if time_law is not None:
             self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
                                         start_angle=node["star_start_angle"], time_law=time_law)

@@ -41,7 +41,7 @@ from std_msgs.msg import Float64MultiArray, String
 from tf2_msgs.msg import TFMessage
 
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.simulator import CONTROL_MODES, RobotSimulator, robot_urdf
+from lpa_transfer.robots.simulator import ACTUATORS, CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 from lpa_transfer_nodes._ros_util import (CLOCK_QOS, LATCHED_QOS, TF_QOS, WORLD_FRAME,
                                           FastExecutor, answering, declare,
@@ -74,6 +74,12 @@ class RobotSim(Node):
                                 "share of the position error removed per physics step; "
                                 "pybullet's own 0.1 can chatter)",
                                 range=(0.0, 1.0), positive=True)
+        actuator = declare(self, "actuator", "torque",
+                           "torque mode only. torque: joint torques, with the robot file's "
+                           "armature and damping; velocity_motor: V-REP's torque mode (each "
+                           "joint's velocity motor towards its velocity limit, force capped "
+                           "at |torque|; no armature, no damping), as in thesis ch. 5",
+                           choices=ACTUATORS)
         self.lockstep = declare(self, "lockstep", True,
                                 "true: lock-step, the ~/step and ~/reset services advance the "
                                 "simulation; false: free-running, a timer advances it in wall "
@@ -104,7 +110,7 @@ class RobotSim(Node):
         self.initial = initial
         self.sim = RobotSimulator(description, control_mode=control_mode,
                                   physics_step=physics_step, initial_positions=initial,
-                                  seed=seed, position_gain=position_gain)
+                                  seed=seed, position_gain=position_gain, actuator=actuator)
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
         self.clock_pub = (self.create_publisher(Clock, clock_topic, CLOCK_QOS)

@@ -311,3 +311,37 @@ def test_damping_on_a_light_link_is_stable_in_torque_mode():
             state = sim.step([0.0, 0.0, 0.0, 0.0, 0.01], 10)
     assert state.velocities[4] == pytest.approx(0.01 / 1.0, rel=0.15)
     assert np.abs(state.velocities).max() < 2.0
+
+
+def test_velocity_motor_actuator_is_a_torque_below_the_velocity_limit_and_caps_the_speed():
+    """V-REP's torque mode (``actuator="velocity_motor"``, thesis ch. 5): while the joints are
+    slower than their velocity limits it moves the arm as the same torques on the arm without
+    armature and damping; then it holds a joint at its limit, as far as |τ| can."""
+    import dataclasses
+
+    youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
+    bare = dataclasses.replace(youbot, joint_armature=np.zeros(5), joint_damping=np.zeros(5))
+    home, tau = [0.0, 0.5, 0.8, 0.5, 0.0], [3.0, 5.0, 2.0, 0.3, 0.0]
+    with RobotSimulator(robot_urdf(bare), "torque", initial_positions=home) as torque, \
+            RobotSimulator(robot_urdf(youbot), "torque", initial_positions=home,
+                           actuator="velocity_motor") as motor:
+        np.testing.assert_array_equal(motor.velocity_limits, youbot.velocity_limits)
+        for _ in range(2):     # 20 ms: every joint still well below pi/2 rad/s
+            expected, state = torque.step(tau, 10), motor.step(tau, 10)
+            np.testing.assert_allclose(state.positions, expected.positions, atol=1e-9)
+            np.testing.assert_allclose(state.velocities, expected.velocities, atol=1e-6)
+        np.testing.assert_array_equal(state.efforts, tau)
+        fastest = np.zeros(2)
+        for _ in range(60):
+            expected, state = torque.step(tau, 10), motor.step(tau, 10)
+            fastest = np.maximum(fastest, np.abs([expected.velocities[0], state.velocities[0]]))
+        # the free torque drives the base yaw (no gravity about its axis) far past its limit;
+        # the motor holds it there (joints that gravity pulls run faster if |τ| cannot brake)
+        assert fastest[0] > 3 * youbot.velocity_limits[0]
+        assert fastest[1] <= youbot.velocity_limits[0] * 1.001
+
+
+def test_unknown_actuator_is_refused():
+    with pytest.raises(ValueError, match="actuator must be one of"):
+        RobotSimulator(robot_urdf(load_robot_params(ROBOTS / "youbot_arm.toml")), "torque",
+                       actuator="servo")

@@ -48,6 +48,14 @@ Joint drives (:mod:`lpa_transfer.robots.params`, "Drive"):
   youBot file, bench/README.md). Joint-limit and contact impulses still see M alone. The
   reported efforts are the commanded (clipped) τ. Position mode uses pybullet's motor
   constraints, which do not see the armature (damping still applies there).
+
+Actuators in torque mode (``actuator``): ``"torque"`` (default) is the above. ``"velocity_motor"``
+is V-REP's torque mode, which the thesis' chapter 5 used (V-REP 3.3.2 default joints, §5.5.1):
+each joint's velocity motor runs towards ± its velocity limit (the URDF's, the sign of τ) with
+its force capped at |τ|, solved inside the constraint solver. Below the velocity limit that is
+the torque τ; at the limit the motor holds the speed (as far as |τ| can) instead of
+accelerating. V-REP's default joints have neither rotor inertia nor viscous damping, so this
+actuator applies neither the URDF's armature nor its damping (issue 26's actuators factor).
 """
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,6 +67,7 @@ from lpa_transfer.robots.planar_chain import load_fixed_robot
 from lpa_transfer.robots.serial_chain import serial_chain_urdf, urdf_joint_armatures
 
 CONTROL_MODES = ("position", "torque")
+ACTUATORS = ("torque", "velocity_motor")
 
 
 def robot_urdf(robot):
@@ -109,15 +118,19 @@ class RobotSimulator:
     target arm did after some random targets); at 0.05 it settles (bench/README.md).
 
     ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
-    (module docstring); the armature acts in torque mode.
+    (module docstring); the armature acts in torque mode with the ``"torque"`` actuator.
+    ``actuator`` (torque mode only): ``"torque"`` or ``"velocity_motor"`` (module docstring).
     """
 
     def __init__(self, urdf, control_mode="position", physics_step=1e-3,
-                 initial_positions=None, seed=0, position_gain=0.05):
+                 initial_positions=None, seed=0, position_gain=0.05, actuator="torque"):
         import pybullet as p
 
         if control_mode not in CONTROL_MODES:
             raise ValueError(f"control_mode must be one of {CONTROL_MODES}, got {control_mode!r}")
+        if actuator not in ACTUATORS:
+            raise ValueError(f"actuator must be one of {ACTUATORS}, got {actuator!r}")
+        self.actuator = actuator
         if not (isinstance(physics_step, (int, float)) and np.isfinite(physics_step)
                 and physics_step > 0):
             raise ValueError(f"physics_step must be a positive number of seconds, "
@@ -153,6 +166,7 @@ class RobotSimulator:
             limits.append((lower, upper) if lower <= upper else (-np.inf, np.inf))
         self.joint_limits = np.array(limits, dtype=float)
         self.effort_limits = np.array([info[10] for info in movable], dtype=float)
+        self.velocity_limits = np.array([info[11] for info in movable], dtype=float)
         if not (self.effort_limits > 0).all():
             bad = [n for n, e in zip(self.joint_names, self.effort_limits) if not e > 0]
             raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
@@ -169,14 +183,21 @@ class RobotSimulator:
         for link in range(-1, n_all):
             p.changeDynamics(self._body, link, linearDamping=0.0, angularDamping=0.0,
                              physicsClientId=cid)
-        for array in (self.joint_limits, self.effort_limits, self.joint_damping, self.armature):
+        for array in (self.joint_limits, self.effort_limits, self.velocity_limits,
+                      self.joint_damping, self.armature):
             array.setflags(write=False)
-        self._drives = self.control_mode == "torque" and (
+        self._motor = self.control_mode == "torque" and self.actuator == "velocity_motor"
+        if self._motor and not (np.isfinite(self.velocity_limits).all()
+                                and (self.velocity_limits > 0).all()):
+            raise ValueError(f"the velocity_motor actuator needs a positive velocity limit on "
+                             f"every joint (<limit velocity=...>), got "
+                             f"{self.velocity_limits.tolist()}")
+        self._drives = self.control_mode == "torque" and not self._motor and (
             (self.armature > 0).any() or (self.joint_damping > 0).any())
         # _drive_torques' constants, computed once: diag(A + D·Δt) and a zero acceleration
         self._drive = np.diag(self.armature + self.joint_damping * self.physics_step)
         self._zero_accel = [0.0] * len(self._joints)
-        if self._drives:   # damping implicitly in _drive_torques instead (module docstring)
+        if self._drives or self._motor:   # damping implicitly in _drive_torques, or none
             for joint in self._joints:
                 p.changeDynamics(self._body, joint, jointDamping=0.0, physicsClientId=cid)
         if self.control_mode == "torque":
@@ -265,11 +286,19 @@ class RobotSimulator:
                                                                     physicsClientId=cid)])
         else:
             torques = np.clip(command, -self.effort_limits, self.effort_limits)
-            for _ in range(n_substeps):
-                applied = self._drive_torques(torques) if self._drives else torques
-                p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL,
-                                            forces=applied.tolist(), physicsClientId=cid)
-                p.stepSimulation(physicsClientId=cid)
+            if self._motor:   # V-REP's torque mode; the motor settings persist over the steps
+                p.setJointMotorControlArray(
+                    body, joints, p.VELOCITY_CONTROL,
+                    targetVelocities=(np.sign(torques) * self.velocity_limits).tolist(),
+                    forces=np.abs(torques).tolist(), physicsClientId=cid)
+                for _ in range(n_substeps):
+                    p.stepSimulation(physicsClientId=cid)
+            else:
+                for _ in range(n_substeps):
+                    applied = self._drive_torques(torques) if self._drives else torques
+                    p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL,
+                                                forces=applied.tolist(), physicsClientId=cid)
+                    p.stepSimulation(physicsClientId=cid)
             self._efforts = torques
         self._steps += n_substeps
         return self.state()
