@@ -13,7 +13,6 @@ from conftest import ROOT
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 from tf_tree import world_poses
-from lpa_transfer.inverse_dynamics.report import merge
 from lpa_transfer.recording.bag import decoded_messages, summary
 from lpa_transfer.recording.scene import render
 from lpa_transfer.robots.params import load_robot_params
@@ -21,7 +20,8 @@ from lpa_transfer.robots.serial_chain import forward_kinematics
 from lpa_transfer_nodes.testing import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
-pytestmark = pytest.mark.timeout(600)   # over setup.cfg's 300 s: each run takes minutes
+# over setup.cfg's 300 s: each run takes minutes
+pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 ROBOTS = ("youbot", "pincher")
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
               "own+transfer-LPA")
@@ -179,73 +179,16 @@ def test_spline_interpolation_puts_the_transferred_data_on_the_task(smoke_run, t
     assert splined < 0.7 * sampled, (splined, sampled)
 
 
-def test_a_run_of_one_condition_repeats_the_full_runs_curves(smoke_run, tmp_path):
-    """``conditions`` runs a share of them (as reference results are joined from shares);
-    own+transfer-LPA then runs right after learning from scratch instead of after four other
-    conditions on the same learner and simulator nodes, and both its curve and the scratch
-    curve come out the same, as merge_results checks (to a relative 1e-6; measured: the
-    16th digit differed)."""
-    share = tmp_path / "own_lpa.yaml"
-    share.write_text("experiment:\n  ros__parameters:\n    conditions: [own+transfer-LPA]\n")
-    out = tmp_path / "run"
-    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
-                          overrides=["smoke.yaml", share])
-    assert result.returncode == 0, result.stdout + result.stderr
-    curves = json.loads((out / "results.json").read_text())["curves_m"]
-    assert sorted(curves) == sorted(f"{robot}/star1/{condition}"
-                                    for robot in ("youbot", "pincher")
-                                    for condition in ("uninitialised", "own+transfer-LPA"))
-    merged, _, _ = merge([smoke_run, out])      # refuses a curve that differs between runs
-    assert len(merged) == 2 * len(CONDITIONS)
-
-
-def test_start_noise_gives_every_seed_its_own_run_from_scratch(tmp_path):
-    """``start_noise``: every seed starts its runs, learning from scratch included, from its
-    own perturbed rest pose, so the scratch curves of two seeds differ; they still learn."""
-    share = tmp_path / "noise.yaml"
-    share.write_text("experiment:\n  ros__parameters:\n    seeds: [0, 1]\n"
-                     "    conditions: [random]\n    start_noise: 0.001\n")
-    out = tmp_path / "run"
-    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
-                          overrides=["smoke.yaml", share])
-    assert result.returncode == 0, result.stdout + result.stderr
-    results = json.loads((out / "results.json").read_text())
-    assert results["settings"]["start_noise"] == 0.001 and results["seeds"] == [0, 1]
-    for robot in ("youbot", "pincher"):
-        scratch = np.asarray(results["curves_m"][f"{robot}/star1/uninitialised"])
-        assert scratch.shape == (2, 2) and (scratch[:, 1] < scratch[:, 0]).all()
-        assert not np.allclose(scratch[0], scratch[1], rtol=1e-6, atol=0)
-    assert "learning from scratch for every seed" in (out / "report.txt").read_text()
-    merged, _, experiment = merge([out])        # its own check: scratch differs by seed
-    assert experiment.start_noise == 0.001 and len(merged) == 2 * 2
-
-
-def test_transfer_between_arms_with_5_and_2_joints(tmp_path):
-    """youbot_two_link.yaml: the same graph with a planar 2-link arm (2-D task space)."""
-    out = tmp_path / "run"
-    result = run_scenario(SCENARIO, out, "youbot_two_link.yaml", timeout=480,
-                          overrides=["smoke.yaml"])
-    assert result.returncode == 0, result.stdout + result.stderr
-    curves = json.loads((out / "results.json").read_text())["curves_m"]
-    for robot in ("youbot", "two_link"):
-        for condition in CONDITIONS:
-            runs = np.asarray(curves[f"{robot}/star1/{condition}"])
-            assert runs.shape == (1, 2) and np.isfinite(runs).all() and (runs > 0).all()
-        scratch = curves[f"{robot}/star1/uninitialised"][0]
-        assert scratch[1] < scratch[0]
-    with np.load(out / "pairs_0_star1.npz") as pairs:      # (q, q̇, q̈, τ) of 5 and 2 joints
-        assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 8)
-    models = sorted(p.name for p in (out / "models").iterdir())
-    assert len(models) == 4
-
-
-def test_the_demo_shape_one_target_with_progress(smoke_run, tmp_path):
-    """What `make demo` runs (demo.yaml), at the smoke size: only the youBot is a target (the
-    Pincher learns from scratch to have experience to give), progress and the summary table
-    reach the terminal, and the curves repeat the full smoke run's (to a relative 1e-6)."""
+def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, tmp_path):
+    """What `make demo` runs (demo.yaml), at the smoke size and as a share of the conditions
+    (reference results are joined from shares): only the youBot is a target (the Pincher
+    learns from scratch to have experience to give), progress and the summary table reach the
+    terminal. own+transfer-LPA runs right after transfer-PA instead of after three other
+    conditions on the same learner and simulator nodes, and every curve repeats the full smoke
+    run's to a relative 1e-6, merge_results' check (measured: the 16th digit differed)."""
     override = tmp_path / "demo_like.yaml"
     override.write_text("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
-                        "    conditions: [uninitialised, transfer-PA]\n")
+                        "    conditions: [transfer-PA, own+transfer-LPA]\n")
     out = tmp_path / "run"
     result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
                           overrides=["smoke.yaml", str(override)], extra_args=["--progress"])
@@ -255,12 +198,12 @@ def test_the_demo_shape_one_target_with_progress(smoke_run, tmp_path):
     assert "seed 0 pincher star1 from scratch: trial 1/2" in shown
     assert "converged at trial" in shown and f"figure  {out}/fig5_7_5_8" in shown
     curves = json.loads((out / "results.json").read_text())["curves_m"]
-    assert sorted(curves) == ["youbot/star1/transfer-PA", "youbot/star1/uninitialised"]
+    assert sorted(curves) == ["youbot/star1/own+transfer-LPA", "youbot/star1/transfer-PA",
+                              "youbot/star1/uninitialised"]
     full = json.loads((smoke_run / "results.json").read_text())["curves_m"]
-    for key, runs in curves.items():
+    for key, runs in curves.items():    # merge_results' check (it joins shares of one target set)
         assert np.allclose(runs, full[key], rtol=1e-6, atol=0), key
     assert sorted(p.name for p in (out / "models").iterdir()) == \
-        sorted(p.name for p in (smoke_run / "models").iterdir() if "pincher-" in p.name
-               and "pa" in p.name and "lpa" not in p.name)
+        sorted(p.name for p in (smoke_run / "models").iterdir() if "pincher-" in p.name)
     report = (out / "report.txt").read_text()
     assert "pincher as target" not in report and "youbot as target" in report

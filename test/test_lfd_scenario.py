@@ -22,6 +22,8 @@ MAPPING_ERROR = {"pr2_right_arm": 0.0131, "meka_right_arm": 0.0043}
 ENCODING_ERROR = {"pr2_right_arm": 0.0139, "meka_right_arm": 0.0056}
 IK_ENCODING_ERROR = {"pr2_right_arm": 0.0035, "meka_right_arm": 0.0033}
 
+pytestmark = pytest.mark.slow     # scenario runs over the node graph
+
 
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):

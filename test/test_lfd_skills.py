@@ -68,6 +68,7 @@ def test_accuracy_sweep_falls_with_more_correspondences(setup, demos):
     assert (sweep.encoding[0, :, 1] < sweep.encoding[0, :, 0]).all()
 
 
+@pytest.mark.slow
 def test_multi_robot_transfer_orders_direct_refined_unrefined(setup, demos):
     """Table 4.3's ordering with 3000 pairs a mapping (measured mapping error: direct 3.0,
     refined 18.2, unrefined 75.7 mm): cascading two mappings adds their errors; the

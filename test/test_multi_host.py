@@ -15,7 +15,7 @@ from lpa_transfer_nodes.testing import run_scenario, unique_domain_id
 
 SCRIPT = ROOT / "scenarios" / "multi_host" / "run.sh"
 SMOKE = ROOT / "scenarios" / "two_link_graph" / "smoke.yaml"
-pytestmark = pytest.mark.timeout(600)
+pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
 
 def multi_host(out, *extra):

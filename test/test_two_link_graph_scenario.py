@@ -18,6 +18,8 @@ MODEL_ID = "two_link_source->two_link_target"
 NODE_LOGS = ("recorder", "lpa_mapping", "source_sim", "target_sim", "correspondence_collector",
              "transfer_evaluation")
 
+pytestmark = pytest.mark.slow     # scenario runs over the node graph
+
 
 @pytest.fixture(scope="module")
 def smoke_run(tmp_path_factory):

@@ -7,5 +7,6 @@ source "$ROOT/tools/env.sh"
 cd "$ROOT"
 # setup.cfg sets testpaths = test, so with no arguments the whole suite runs, and prints the
 # 15 slowest tests. Two workers (TEST_WORKERS=0 runs in this process); each test file stays on
-# one worker, which starts its module fixtures (the scenario runs) once.
-exec python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile "$@"
+# one worker, which starts its module fixtures (the scenario runs) once; the modules with slow
+# tests first, in the order test/conftest.py puts them (not xdist's: most tests first).
+exec python -m pytest -n "${TEST_WORKERS:-2}" --dist loadfile --no-loadscope-reorder "$@"
