@@ -64,6 +64,14 @@ def test_bootstrap_over_seeds_brackets_the_saving_and_counts_who_saves_more():
     assert again["a"]["transfer-PA"] == (low, high, more, as_much, less)     # seeded
 
 
+
+def test_a_run_of_learning_from_scratch_only_has_nothing_to_bootstrap():
+    """conditions [uninitialised] (e.g. seed shares of scratch runs): every robot is in the
+    summary, with no condition (a run of the chapter 5 graph stopped on a KeyError here)."""
+    scratch = {f"{robot}/star1/uninitialised": [[4.0, 2.0, 1.0]] * 2 for robot in ("a", "b")}
+    assert bootstrap_savings(scratch, ["a", "b"], ["star1"], 0.1, 2.0, n_resamples=5) == \
+        {"a": {}, "b": {}}
+
 def test_paired_comparison_counts_the_seeds_each_condition_beats_random_in():
     """Seed by seed against random: lower early on every seed of 6 gives Wilcoxon's exact
     two-sided p = 2 / 2^6; a condition equal to random on every seed has no p."""

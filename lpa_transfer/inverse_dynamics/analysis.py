@@ -96,9 +96,10 @@ def bootstrap_savings(curves, robots, stars, tolerance, babbling_seconds, n_resa
         _, savings = convergence_table({key: np.asarray(runs)[picks] for key, runs in
                                         curves.items()}, robots, stars, tolerance,
                                        babbling_seconds)
-        for robot, saved in savings.items():
+        for robot, saved in savings.items():      # every robot, also with no conditions
+            by_condition = draws.setdefault(robot, {})
             for condition, value in saved.items():
-                draws.setdefault(robot, {}).setdefault(condition, []).append(value)
+                by_condition.setdefault(condition, []).append(value)
     summary = {}
     for robot, by_condition in draws.items():
         base = np.asarray(by_condition.get(reference, np.nan))
