@@ -1,8 +1,8 @@
 """The 2-link graph over three network namespaces (scenarios/multi_host/run.sh, issue 30):
 the same results as on one host, every topic recorded, no route out, and a link that goes
-down for 2 s mid-collection ridden out; and chapter 5 seed shares on two namespaces
-(scenarios/multi_host/seed_shares.sh) merged to the one-host result. Skipped, with the
-script's one-line reason, where network namespaces cannot be made (not root, no ip netns)."""
+down for 2 s mid-collection ridden out (chapter 5 seed shares on two namespaces:
+test_inverse_dynamics_variants.py). Skipped, with the script's one-line reason, where
+network namespaces cannot be made (not root, no ip netns)."""
 import json
 import os
 import subprocess
@@ -74,42 +74,3 @@ def test_a_robots_host_link_down_for_2_s_is_ridden_out(tmp_path, one_host):
     assert "fault: host rob link up again" in result.stderr
     same_results(out, one_host)
 
-
-def test_chapter_5_seed_shares_on_two_hosts_merge_to_the_one_host_result(tmp_path):
-    """Item 4 (scenarios/multi_host/seed_shares.sh): seeds 0 and 1 of the chapter 5 graph
-    (smoke size; learning from scratch with start noise, so each seed has curves of its own)
-    run in parallel, each in a network namespace with nothing but a loopback interface;
-    merge_results joins them into the curves of one run over both seeds on this host (to the
-    merge's relative 1e-6: the graph is deterministic)."""
-    scenario = ROOT / "scenarios" / "inverse_dynamics"
-    scratch = tmp_path / "scratch.yaml"
-    scratch.write_text("experiment:\n  ros__parameters:\n    conditions: [uninitialised]\n"
-                       "    start_noise: 0.001\n")
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    before = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
-    result = subprocess.run(
-        ["bash", str(ROOT / "scenarios" / "multi_host" / "seed_shares.sh"), "--seeds", "0 1",
-         "--override", str(scenario / "smoke.yaml"), "--override", str(scratch),
-         "--out", str(tmp_path / "shares")], env=env, capture_output=True, text=True,
-        timeout=400)
-    if result.returncode == 77:
-        pytest.skip(result.stderr.strip())
-    assert result.returncode == 0, result.stdout + result.stderr
-    assert "merged 2 shares" in result.stdout
-    after = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
-    assert after == before                                  # the namespaces are removed
-    both = tmp_path / "both.yaml"
-    both.write_text("experiment:\n  ros__parameters:\n    seeds: [0, 1]\n")
-    one = run_scenario(scenario, tmp_path / "one", "config.yaml", timeout=400,
-                       overrides=["smoke.yaml", str(scratch), str(both)])
-    assert one.returncode == 0, one.stdout + one.stderr
-    merged = json.loads((tmp_path / "shares" / "merged" / "results.json").read_text())
-    expected = json.loads((tmp_path / "one" / "results.json").read_text())
-    assert merged["seeds"] == expected["seeds"] == [0, 1]
-    keys = ["pincher/star1/uninitialised", "youbot/star1/uninitialised"]
-    assert sorted(merged["curves_m"]) == sorted(expected["curves_m"]) == keys
-    for key in keys:
-        runs = np.asarray(merged["curves_m"][key])
-        assert runs.shape == (2, 2)
-        assert np.allclose(runs, expected["curves_m"][key], rtol=1e-6, atol=0), key
-        assert not np.allclose(runs[0], runs[1], rtol=1e-6, atol=0)   # each seed its own start
