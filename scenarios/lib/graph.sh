@@ -46,11 +46,14 @@ PY
 PIDS=() NAMES=() CURRENT=""
 # LPA_HOSTS (set by scenarios/multi_host/run.sh): "NAME=NETNS ..." runs node or step NAME in
 # that network namespace (ip netns exec keeps the PID, so stopping works as on one host), with
-# the environment of LPA_HOST_ENV (e.g. discovery over the namespaces' subnet).
+# the environment of LPA_HOST_ENV (e.g. discovery over the namespaces' subnet). NAME may be a
+# shell pattern (babbling_*); the first entry that matches wins.
 on_host() {   # on_host NAME: the command prefix that puts NAME on its host ('' on this one)
-    local entry
-    for entry in ${LPA_HOSTS:-}; do
-        if [ "${entry%%=*}" = "$1" ]; then echo "ip netns exec ${entry#*=} env ${LPA_HOST_ENV:-}"; return; fi
+    local entry entries
+    read -r -a entries <<<"${LPA_HOSTS:-}"      # no pathname expansion of the patterns
+    for entry in "${entries[@]}"; do
+        # shellcheck disable=SC2053   # the entry's name is a pattern on purpose
+        if [[ "$1" == ${entry%%=*} ]]; then echo "ip netns exec ${entry#*=} env ${LPA_HOST_ENV:-}"; return; fi
     done
 }
 # sim_time NAMESPACE: the arguments that put a node on the simulated clock of the robot in

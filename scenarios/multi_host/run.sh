@@ -4,9 +4,12 @@
 # lpa_mapping; learners: the collector, the evaluation and the recorder. The 2-link graph
 # scenario (scenarios/two_link_graph/run.sh) runs unchanged, each node on its host.
 #
-# Usage (as root): scenarios/multi_host/run.sh [--link-down HOST AFTER SECONDS]
-#                  [two_link_graph run.sh arguments...]
+# Usage (as root): scenarios/multi_host/run.sh [--scenario inverse_dynamics]
+#                  [--link-down HOST AFTER SECONDS] [the scenario's run.sh arguments...]
 #   e.g. --config scenarios/two_link_graph/smoke.yaml --out runs/multi_host
+#   --scenario inverse_dynamics --override scenarios/inverse_dynamics/demo.yaml: the default
+#   demo's graph (robots: youbot_sim, pincher_sim; mapping: lpa_mapping; learners: the
+#   recorder, the learners, the babbling collectors and the experiment)
 #   --link-down rob 0.2 2: the robots host's link goes down 0.2 s after the collector logged
 #   that it started babbling (discovery is done by then: the fault lands mid-collection), for
 #   2 s (a fault; hosts: rob, map, lrn). Leaves topology.txt in the run directory: each host's
@@ -26,8 +29,18 @@ ROOT=$(cd "$HERE/../.." && pwd)
 if [ "$(id -u)" != 0 ] || ! ip netns list >/dev/null 2>&1; then
     echo "skipped: network namespaces need root and iproute2's ip netns" >&2; exit 77
 fi
-LINK_DOWN=()
+LINK_DOWN=() SCENARIO=two_link_graph
+if [ "${1:-}" = --scenario ]; then SCENARIO=$2; shift 2; fi
 if [ "${1:-}" = --link-down ]; then LINK_DOWN=("$2" "$3" "$4"); shift 4; fi
+case "$SCENARIO" in
+    two_link_graph|inverse_dynamics) ;;
+    *) echo "error: --scenario must be two_link_graph or inverse_dynamics, got '$SCENARIO'" >&2
+       exit 2 ;;
+esac
+if [ ${#LINK_DOWN[@]} = 3 ] && [ "$SCENARIO" != two_link_graph ]; then
+    echo "error: --link-down is for the two_link_graph scenario (it waits for its collector)" >&2
+    exit 2
+fi
 PREFIX=lpa$$
 SWITCH=${PREFIX}sw
 declare -A ADDRESS=([rob]=10.231.0.1 [map]=10.231.0.2 [lrn]=10.231.0.3)
@@ -62,14 +75,19 @@ done
 { echo "== root namespace links"; ip -o link show; } >>"$TOPOLOGY"
 set +e
 
-export LPA_HOSTS="source_sim=${PREFIX}rob target_sim=${PREFIX}rob lpa_mapping=${PREFIX}map
-    recorder=${PREFIX}lrn correspondence_collector=${PREFIX}lrn transfer_evaluation=${PREFIX}lrn"
+if [ "$SCENARIO" = two_link_graph ]; then
+    export LPA_HOSTS="source_sim=${PREFIX}rob target_sim=${PREFIX}rob lpa_mapping=${PREFIX}map
+        recorder=${PREFIX}lrn correspondence_collector=${PREFIX}lrn
+        transfer_evaluation=${PREFIX}lrn"
+else    # every other node (learners, collectors, experiment) on the learners' host
+    export LPA_HOSTS="*_sim=${PREFIX}rob lpa_mapping=${PREFIX}map *=${PREFIX}lrn"
+fi
 export LPA_HOST_ENV="ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET FASTDDS_BUILTIN_TRANSPORTS=UDPv4"
-OUT=$(python3 - "$ROOT" "$@" <<'PY'
+OUT=$(python3 - "$ROOT" "$SCENARIO" "$@" <<'PY'
 import os, sys
-root, args = sys.argv[1], sys.argv[2:]
+root, scenario, args = sys.argv[1], sys.argv[2], sys.argv[3:]
 print(os.path.realpath(args[args.index("--out") + 1]) if "--out" in args
-      else os.path.join(root, "runs", "two_link_graph"))
+      else os.path.join(root, "runs", scenario))
 PY
 )
 if [ ${#LINK_DOWN[@]} = 3 ]; then
@@ -81,5 +99,5 @@ if [ ${#LINK_DOWN[@]} = 3 ]; then
      echo "[$(date +%T)] fault: host ${LINK_DOWN[0]} link up again" >&2) &
     FAULT=$!
 fi
-bash "$ROOT/scenarios/two_link_graph/run.sh" "$@"
+bash "$ROOT/scenarios/$SCENARIO/run.sh" "$@"
 exit $?
