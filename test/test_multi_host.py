@@ -74,3 +74,28 @@ def test_a_robots_host_link_down_for_2_s_is_ridden_out(tmp_path, one_host):
     assert "fault: host rob link up again" in result.stderr
     same_results(out, one_host)
 
+
+
+def test_on_host_reads_every_line_of_lpa_hosts_and_matches_patterns():
+    """graph.sh's on_host: LPA_HOSTS entries on several lines (as multi_host/run.sh writes
+    them) all count, a name may be a shell pattern (the first match wins), no file name is
+    expanded, and a node that no entry names stays on this host."""
+    graph = (ROOT / "scenarios" / "lib" / "graph.sh").read_text()
+    function = graph[graph.index("on_host() {"):]
+    function = function[:function.index("\n}\n") + 3]
+    script = function + """
+set -euo pipefail
+LPA_HOSTS="a_sim=R b_sim=R
+    lpa_mapping=M
+    *_sim=X *=L"
+for name in a_sim b_sim lpa_mapping c_sim experiment; do echo "$name:$(on_host "$name")"; done
+LPA_HOSTS=""; echo "empty:$(on_host x)"
+"""
+    result = subprocess.run(["bash", "-c", script], capture_output=True, text=True, timeout=30,
+                            cwd=ROOT)                   # ROOT holds files that '*' would match
+    assert result.returncode == 0, result.stderr
+    hosts = dict(line.split(":", 1) for line in result.stdout.splitlines())
+    assert {name: prefix.split(" env")[0] for name, prefix in hosts.items()} == {
+        "a_sim": "ip netns exec R", "b_sim": "ip netns exec R",
+        "lpa_mapping": "ip netns exec M", "c_sim": "ip netns exec X",
+        "experiment": "ip netns exec L", "empty": ""}

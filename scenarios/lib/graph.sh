@@ -50,7 +50,8 @@ PIDS=() NAMES=() CURRENT=""
 # shell pattern (babbling_*); the first entry that matches wins.
 on_host() {   # on_host NAME: the command prefix that puts NAME on its host ('' on this one)
     local entry entries
-    read -r -a entries <<<"${LPA_HOSTS:-}"      # no pathname expansion of the patterns
+    # every word of every line, without pathname expansion of the patterns
+    read -r -d '' -a entries <<<"${LPA_HOSTS:-}" || true
     for entry in "${entries[@]}"; do
         # shellcheck disable=SC2053   # the entry's name is a pattern on purpose
         if [[ "$1" == ${entry%%=*} ]]; then echo "ip netns exec ${entry#*=} env ${LPA_HOST_ENV:-}"; return; fi
