@@ -27,9 +27,9 @@ from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
 from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS
 
 
-def scratch(config, name, star, time_law, n_trials, lwpr=None, actuator=None):
-    robot = StarRobot(config, name, star).configure(config, name, star, time_law, lwpr,
-                                                    actuator)
+def scratch(config, name, star, time_law, n_trials, lwpr=None, actuator="torque"):
+    robot = StarRobot(config, name, star, actuator).configure(config, name, star, time_law,
+                                                              lwpr)
     learner = robot.learner()
     errors, experience = robot.trials(learner, n_trials)
     n = robot.params.n_joints
@@ -46,7 +46,7 @@ def main(argv=None):
     parser.add_argument("--stars", nargs="+", default=["star1", "star2"])
     parser.add_argument("--time-laws", nargs="+", default=list(TIME_LAWS))
     parser.add_argument("--lwpr", type=json.loads, default=None)
-    parser.add_argument("--actuator", default=None,
+    parser.add_argument("--actuator", default="torque",
                         help="torque (default) or velocity_motor (V-REP's torque mode)")
     args = parser.parse_args(argv)
     config = yaml.safe_load(CONFIG.read_text())
@@ -55,8 +55,8 @@ def main(argv=None):
     for name in args.targets:
         for star in args.stars:
             for time_law in args.time_laws:
-                errors, torque, saturated = scratch(config, name, star, time_law, args.trials, args.lwpr,
-                                        args.actuator)
+                errors, torque, saturated = scratch(config, name, star, time_law,
+                                                    args.trials, args.lwpr, args.actuator)
                 converged = trials_to_convergence(errors, errors[-1], 0.1)
                 print(f"{name + '/' + star:<16} {time_law:<13} {1e3 * errors[0]:8.2f} "
                       f"{1e3 * errors[-1]:7.2f} {converged:9d} {100 * saturated[0]:5.1f}% "

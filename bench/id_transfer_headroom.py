@@ -50,9 +50,11 @@ MOVING = 1e-3          # a column whose spread is below this is a joint the babb
 
 
 class StarRobot:
-    """One robot of the scenario on one star: its simulator, task and learner settings."""
+    """One robot of the scenario on one star: its simulator, task and learner settings.
+    ``actuator``: the simulator's (``"torque"`` or ``"velocity_motor"``, V-REP's torque mode;
+    lpa_transfer.robots.simulator), issue 26's actuators factor."""
 
-    def __init__(self, config, name, star):
+    def __init__(self, config, name, star, actuator="torque"):
         node = config[f"/{name}/{star}"]["ros__parameters"]
         self.params = load_robot_params(node["robot"])
         self.kinematics = robot_kinematics(self.params, node["centre_pose"])
@@ -65,18 +67,12 @@ class StarRobot:
         self.regressor = (node["regressor"], dict(json.loads(node["regressor_params"]),
                                                   norm_in=input_scale(*self.trajectory[:3])))
         self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
-                                  initial_positions=self.kinematics.home)
+                                  initial_positions=self.kinematics.home, actuator=actuator)
 
-    def configure(self, config, name, star, time_law=None, lwpr=None, actuator=None):
-        """Issue 26's switches: the star legs' time law, LWPR hyperparameters replacing the
-        config's (``lwpr``, a dict) and the simulator's actuator (``"torque"`` or
-        ``"velocity_motor"``, V-REP's torque mode; lpa_transfer.robots.simulator)."""
+    def configure(self, config, name, star, time_law=None, lwpr=None):
+        """Issue 26's switches: the star legs' time law and LWPR hyperparameters replacing the
+        config's (``lwpr``, a dict)."""
         node = config[f"/{name}/{star}"]["ros__parameters"]
-        if actuator is not None and actuator != self.sim.actuator:
-            physics_step = self.sim.physics_step
-            self.sim.close()
-            self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
-                                      initial_positions=self.kinematics.home, actuator=actuator)
         if time_law is not None:
             self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
                                         start_angle=node["star_start_angle"], time_law=time_law)
