@@ -10,21 +10,12 @@ Subpackages by role: ``transfer`` (PA, LPA, model files), ``robots``, ``learners
 ``exploration``, ``evaluation``, ``recording``, and one per thesis chapter: ``lfd`` (ch. 4),
 ``inverse_dynamics`` (ch. 5), ``goal_babbling`` (ch. 6).
 """
-import importlib
+from lpa_transfer._lazy import lazy_names
 
-#: The top-level names and their modules, imported on first use (PEP 562), so that a node
-#: that needs only ``lpa_transfer.robots`` does not import the learners and scikit-learn.
+#: The top-level names and their modules, imported on first use, so that a node that needs
+#: only ``lpa_transfer.robots`` does not import the learners and scikit-learn.
 _LAZY = {"ProcrustesAnalysis": "lpa_transfer.transfer",
          "LocalProcrustesAnalysis": "lpa_transfer.transfer",
          "load_model": "lpa_transfer.transfer", "LWPR": "lpa_transfer.learners.lwpr"}
 __all__ = list(_LAZY)
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        return getattr(importlib.import_module(_LAZY[name]), name)
-    raise AttributeError(f"module 'lpa_transfer' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(list(globals()) + __all__)
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
