@@ -2,7 +2,8 @@
 # The node graph over three network "hosts": Linux network namespaces joined by a bridge that
 # lives in a fourth, "switch" namespace (issue 30). robots: the two robot_sims; mapping:
 # lpa_mapping; learners: the collector, the evaluation and the recorder. The 2-link graph
-# scenario (scenarios/two_link_graph/run.sh) runs unchanged, each node on its host.
+# scenario (scenarios/two_link_graph/run.sh), or with --scenario inverse_dynamics the default
+# demo's graph, runs unchanged, each node on its host.
 #
 # Usage (as root): scenarios/multi_host/run.sh [--scenario inverse_dynamics]
 #                  [--link-down HOST AFTER SECONDS] [the scenario's run.sh arguments...]
