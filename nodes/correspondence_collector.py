@@ -19,8 +19,9 @@ long as the computation, and the same parameters give the same pairs, bit for bi
 
 Guided exploration (``program:=goal_babbling``, thesis §6.4.2, Alg. 7,
 :func:`lpa_transfer.exploration.correspondences.collect_guided_correspondences`): the target
-goal-babbles (Alg. 6) on the joints it shares with the source, then the source executes the
-same commands; pair i is each robot's observed (q̄, x) for command i (``same_command``).
+goal-babbles (Alg. 6) on the joints it shares with the source, then the source takes the
+posture the target reached in each movement (``source_follows``), settling by its state; pair
+i is each robot's observed (q̄, x) for movement i, checked as a ``same_command`` pair.
 
 Parameters, topics and the details of guided exploration: docs/nodes.md.
 """
@@ -38,11 +39,12 @@ from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.control import PID, start_servo
 from lpa_transfer.exploration.correspondences import (BAD_PAIR_ACTIONS, DEFAULT_FEATURES,
                                                       FEATURES, PAIRING_RULES, PairCheck,
+                                                      SettlingStep,
                                                       check_features, pair_check_line,
                                                       check_guided_exploration, check_pairing_rule,
                                                       collect_correspondences,
                                                       collect_guided_correspondences)
-from lpa_transfer.exploration.guided import TARGET_RANGES
+from lpa_transfer.exploration.guided import SOURCE_FOLLOWS, TARGET_RANGES
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer._validation import check_int, check_x_bounds
 from lpa_transfer.robots.environment import stepped_environment
@@ -291,6 +293,11 @@ class CorrespondenceCollector(Node):
                                     "explores within both robots' ranges of the shared joints; "
                                     "own: within its own, and only the commands the source "
                                     "could follow are pairs", choices=TARGET_RANGES)
+        self.source_follows = declare(
+            self, "source_follows", "reached", "reached: the source takes the posture the "
+            "target reached in each movement and settles there (max_settle_steps), so both rows "
+            "of a pair are at the same shared joints; command: it is sent the target's command "
+            "for steps_per_sample steps and lags it its own way", choices=SOURCE_FOLLOWS)
         check_guided_exploration(self.babbling, self.kinematics["source"],
                                  self.kinematics["target"], self.joints["source"],
                                  self.joints["target"], self.guided_seconds, self.target_range)
@@ -395,15 +402,20 @@ class CorrespondenceCollector(Node):
             f"{self.joints['source']}): same_command, seed {babbling.seed}")
         for side, client in self.reset_clients.items():   # same seed, same start, same pairs
             robot_resetter(self.call, client, side)(self.kinematics[side].home)
-        environments = {side: stepped_environment(self.kinematics[side], self.stepper(side),
-                                                  self.steps_per_sample)
-                        for side in self.robots}
+        settling = SettlingStep(self.stepper("source"), self.pair_check
+                                if self.source_follows == "reached"
+                                else dataclasses.replace(self.pair_check, max_settle_steps=0))
         pairs = collect_guided_correspondences(
-            babbling, environments["source"], environments["target"], self.joints["source"],
-            self.joints["target"], self.guided_seconds, on_pair=self.publish_pair,
-            should_stop=self.stop.is_set, target_range=self.target_range)
-        self.get_logger().info(f"pairing check (reported, not enforced: each row is what its "
-                               f"robot reached): {pair_check_line(pairs.metadata)}, median "
+            babbling, stepped_environment(self.kinematics["source"], settling,
+                                          self.steps_per_sample),
+            stepped_environment(self.kinematics["target"], self.stepper("target"),
+                                self.steps_per_sample),
+            self.joints["source"], self.joints["target"], self.guided_seconds,
+            on_pair=self.publish_pair, should_stop=self.stop.is_set,
+            target_range=self.target_range, source_follows=self.source_follows,
+            pair_check=self.pair_check, source_settling=settling,
+            names=(self.robots["source"].name, self.robots["target"].name))
+        self.get_logger().info(f"pairing check: {pair_check_line(pairs.metadata)}, median "
                                f"{pairs.metadata['median_residual']:.3g} rad")
         pairs.metadata.update(program=GUIDED)
         return pairs

@@ -13,6 +13,7 @@ from lpa_transfer.exploration.babbling import BabblingProgram
 from lpa_transfer.robots.kinematics import Kinematics, planar_kinematics
 from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, FEATURES,
                                                       CorrespondenceSet, PairCheck, PairingError,
+                                                      SettlingStep,
                                                       check_guided_exploration,
                                                       collect_correspondences,
                                                       collect_guided_correspondences,
@@ -42,10 +43,11 @@ class Recorder:
     """A simulator's ``step`` that records the commands it got and the states it returned."""
 
     def __init__(self, sim):
-        self.sim, self.commands, self.states = sim, [], []
+        self.sim, self.commands, self.states, self.n_steps = sim, [], [], []
 
     def __call__(self, command, n_steps):
         self.commands.append(np.array(command, dtype=float))
+        self.n_steps.append(n_steps)
         self.states.append(self.sim.step(command, n_steps))
         return self.states[-1]
 
@@ -465,66 +467,110 @@ def test_load_correspondences_rejects_damaged_and_foreign_files(tmp_path):
 GB_HOME = [-0.785398, 1.65]                 # the Table 6.1 arms' home (the sims start there)
 GB_BOUNDS = ((0.1, -1.1), (1.1, 0.4))       # the target's X_bounds
 GB_STEPS = 100                              # physics steps a movement step (0.1 s)
+UNCHECKED = PairCheck(tolerance=np.inf)     # the plumbing tests: pairs kept whatever apart
 
 
 @pytest.fixture
 def gb_arms():
-    """gb_arms(side) -> (kinematics, stepped environment, recorder of its steps): an
-    in-process Table 6.1 arm (scenarios/robots/goal_babbling_<side>.toml) at home."""
+    """gb_arms(side, settle=False) -> (kinematics, stepped environment, recorder of its
+    steps): an in-process Table 6.1 arm (scenarios/robots/goal_babbling_<side>.toml) at home;
+    ``settle``: each command stepped on until the arm settles (SettlingStep, PairCheck's
+    defaults; the environment's ``settling``)."""
     sims = []
 
-    def make(side):
+    def make(side, settle=False):
         params = robot(f"goal_babbling_{side}")
         kinematics = planar_kinematics(params, GB_HOME)
         sims.append(RobotSimulator(robot_urdf(params), initial_positions=GB_HOME))
         recorder = Recorder(sims[-1])
-        return kinematics, stepped_environment(kinematics, recorder, GB_STEPS), recorder
+        step = SettlingStep(recorder, PairCheck()) if settle else recorder
+        environment = stepped_environment(kinematics, step, GB_STEPS)
+        return kinematics, environment, recorder, step
 
     yield make
     for sim in sims:
         sim.close()
 
 
-def guided(gb_arms, seconds=10.0, seed=2, **kwargs):
-    (source_kinematics, source, source_steps), (target_kinematics, target, target_steps) = \
-        gb_arms("source"), gb_arms("target")
-    pairs = collect_guided_correspondences(GoalBabbling(GB_BOUNDS, seed=seed), source, target,
-                                           [0, 1], [0, 1], seconds, **kwargs)
+def guided(gb_arms, seconds=10.0, seed=2, settle=None, **kwargs):
+    """A guided collection; the source settles (by default unless it follows the commands)."""
+    if settle is None:
+        settle = kwargs.get("source_follows", "reached") == "reached"
+    (source_kinematics, source, source_steps, settling), \
+        (target_kinematics, target, target_steps, _) = gb_arms("source", settle), \
+        gb_arms("target")
+    pairs = collect_guided_correspondences(
+        GoalBabbling(GB_BOUNDS, seed=seed), source, target, [0, 1], [0, 1], seconds,
+        source_settling=settling if settle else None, **kwargs)
     return pairs, (source_kinematics, source_steps), (target_kinematics, target_steps)
 
 
-def test_guided_collection_pairs_each_robots_observations_of_the_same_commands(gb_arms):
+def first_steps(recorder):
+    """The commands a settling robot was sent, one per movement (the step calls of a whole
+    movement step; the settling ones are shorter)."""
+    return [command for command, n in zip(recorder.commands, recorder.n_steps) if n == GB_STEPS]
+
+
+def test_guided_collection_pairs_the_targets_reached_postures_with_the_settled_source(gb_arms):
     pairs, (source_kinematics, source), (target_kinematics, target) = guided(gb_arms)
-    assert pairs.source.shape == pairs.target.shape == (100, 4) and pairs.complete
-    assert pairs.pairing_rule == "same_command" and pairs.features == DEFAULT_FEATURES
-    assert pairs.sim_time == pytest.approx(10.0)
+    assert pairs.complete and pairs.pairing_rule == "same_command"
+    assert pairs.features == DEFAULT_FEATURES and pairs.sim_time == pytest.approx(10.0)
     assert pairs.metadata["seed"] == 2 and pairs.metadata["guided_seconds"] == 10.0
+    assert pairs.metadata["source_follows"] == "reached"
     np.testing.assert_array_equal(pairs.metadata["x_high"], GB_BOUNDS[1])
-    # Alg. 7: the target babbles first (from its home), then the source runs its commands.
-    assert len(target.commands) == 101 and len(source.commands) == 100
+    # Alg. 7: the target babbles first (from its home); the source then takes each posture
+    # the target reached, settling there (more step calls than movements).
+    assert len(target.commands) == 101 and len(source.commands) > 100
     np.testing.assert_array_equal(target.commands[0], GB_HOME)
-    np.testing.assert_array_equal(source.commands, target.commands[1:])
-    # Each side's rows are what that robot reached, and x is its own kinematics of q̄.
-    for recorder, samples in ((source, pairs.source), (target, pairs.target)):
-        states = recorder.states[-100:]
-        np.testing.assert_array_equal(samples[:, :2], [state.positions for state in states])
-        np.testing.assert_array_equal(samples[:, 2:], [state.end_effector[:2]
-                                                       for state in states])
+    reached = np.array([state.positions for state in target.states[1:]])
+    np.testing.assert_array_equal(first_steps(source), np.clip(
+        reached, *np.array(source_kinematics.joint_limits).T))
+    # Each side's rows are what that robot reached, x its own kinematics of q̄; the pairs'
+    # shared joints agree within the check's tolerance, and every pair is kept here.
+    experience = pairs.metadata["target_experience"]
+    np.testing.assert_array_equal(experience[:, :2], reached)
+    assert len(pairs) == pairs.metadata["followed"].sum() == pairs.metadata["pairs_checked"]
     for kinematics, samples in ((source_kinematics, pairs.source),
                                 (target_kinematics, pairs.target)):
         np.testing.assert_allclose(samples[:, 2:], kinematics.forward(samples[:, :2]),
                                    atol=1e-6)
-    lag = np.abs(pairs.source[:, :2] - pairs.target[:, :2])
-    assert lag.max() < 0.3 and np.median(lag) < 0.02          # the same commands
-    # reported as the pairing check (not enforced: each row is what its robot reached)
-    assert pairs.metadata["worst_residual"] == lag.max()
-    assert pairs.metadata["median_residual"] == np.median(lag.max(axis=1))
-    assert (pairs.metadata["pairs_checked"], pairs.metadata["pairs_dropped"]) == (100, 0)
+    residual = np.abs(pairs.source[:, :2] - pairs.target[:, :2]).max(axis=1)
+    assert residual.max() <= PairCheck().tolerance
+    assert pairs.metadata["worst_residual"] == residual.max()
+    assert pairs.metadata["median_residual"] == np.median(residual)
+    assert pairs.metadata["unsettled_source"] == 0
+    assert pairs.metadata["pairs_dropped"] == 0 and len(pairs) >= 95
     assert np.abs(pairs.source[:, 2:] - pairs.target[:, 2:]).max() > 0.1   # other arms
     # Seeded: fresh simulators and the same seed repeat the collection bit for bit.
     again, _, _ = guided(gb_arms)
     np.testing.assert_array_equal(again.source, pairs.source)
     np.testing.assert_array_equal(again.target, pairs.target)
+
+
+def test_guided_source_following_the_commands_lags_and_fails_the_pairing_check(gb_arms):
+    """source_follows 'command' (the collector before the check): both arms lag the same
+    command their own way; with the check off it reports how far apart (up to 0.3 rad here),
+    with the default check it refuses the set, naming the robots, the rule and the residual."""
+    pairs, (_, source), (_, target) = guided(gb_arms, source_follows="command",
+                                             pair_check=PairCheck(tolerance=np.inf))
+    assert pairs.source.shape == pairs.target.shape == (100, 4)
+    np.testing.assert_array_equal(source.commands, target.commands[1:])   # one step each
+    lag = np.abs(pairs.source[:, :2] - pairs.target[:, :2])
+    assert 0.01 < lag.max() < 0.3 and np.median(lag) < 0.02
+    assert pairs.metadata["worst_residual"] == lag.max()
+    assert (pairs.metadata["pairs_checked"], pairs.metadata["pairs_dropped"]) == (100, 0)
+    with pytest.raises(PairingError, match=r"arm_s -> arm_t: \d+ of \d+ same_command pairs "
+                       r"are not true correspondences \(worst residual 0\.\d+ rad > "
+                       r"tolerance 0\.001 rad"):
+        guided(gb_arms, source_follows="command", names=("arm_s", "arm_t"))
+    # dropping up to half of them is allowed if asked for: the rest are true pairs
+    kept, _, _ = guided(gb_arms, source_follows="command",
+                        pair_check=PairCheck(max_bad_share=0.5))
+    assert 0 < kept.metadata["pairs_dropped"] <= 50
+    assert len(kept) == 100 - kept.metadata["pairs_dropped"]
+    assert np.abs(kept.source[:, :2] - kept.target[:, :2]).max() <= 1e-3
+    assert kept.metadata["followed"].sum() == len(kept)
+    assert kept.metadata["target_experience"].shape == (100, 4)   # the target keeps them all
 
 
 def test_guided_on_pair_sees_each_pair_as_the_source_executes_its_command(gb_arms):
@@ -535,10 +581,11 @@ def test_guided_on_pair_sees_each_pair_as_the_source_executes_its_command(gb_arm
         seen.append((index, len(steps["source"].commands), len(steps["target"].commands),
                      source_row.copy(), target_row.copy()))
 
-    (_, source, steps["source"]), (_, target, steps["target"]) = \
+    (_, source, steps["source"], _), (_, target, steps["target"], _) = \
         gb_arms("source"), gb_arms("target")
     pairs = collect_guided_correspondences(GoalBabbling(GB_BOUNDS, seed=4), source, target,
-                                           [0, 1], [0, 1], 3.0, on_pair=on_pair)
+                                           [0, 1], [0, 1], 3.0, on_pair=on_pair,
+                                           pair_check=UNCHECKED)
     assert [index for index, *_ in seen] == list(range(30))
     assert [n for _, n, *_ in seen] == list(range(1, 31))      # right after command i
     assert {n for _, _, n, *_ in seen} == {31}                 # the target had babbled
@@ -550,18 +597,18 @@ def test_guided_should_stop_pairs_only_the_commands_both_robots_executed(gb_arms
     steps = {}
 
     def collect_until(side, n_commands):
-        (_, source, steps["source"]), (_, target, steps["target"]) = \
+        (_, source, steps["source"], _), (_, target, steps["target"], _) = \
             gb_arms("source"), gb_arms("target")
         return collect_guided_correspondences(
             GoalBabbling(GB_BOUNDS, seed=2), source, target, [0, 1], [0, 1], 10.0,
-            should_stop=lambda: len(steps[side].commands) >= n_commands)
+            should_stop=lambda: len(steps[side].commands) >= n_commands, pair_check=UNCHECKED)
 
     pairs = collect_until("source", 30)          # stopped while the source replays
     assert not pairs.complete and pairs.source.shape == pairs.target.shape == (30, 4)
     assert pairs.sim_time == pytest.approx(3.0)
     assert len(steps["source"].commands) == 30 and len(steps["target"].commands) == 101
     np.testing.assert_array_equal(pairs.target[:, :2], positions(steps["target"])[:30])
-    full, _, _ = guided(gb_arms)
+    full, _, _ = guided(gb_arms, settle=False, pair_check=UNCHECKED)
     np.testing.assert_array_equal(pairs.source, full.source[:30])
     np.testing.assert_array_equal(pairs.target, full.target[:30])
     pairs = collect_until("target", 50)          # stopped while the target babbles

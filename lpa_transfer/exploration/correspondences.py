@@ -33,8 +33,8 @@ z = (q, x) of a planar arm.
 
 Guided exploration (§6.4.2, Alg. 7) is the fourth way, with its own pairing:
 :func:`collect_guided_correspondences` lets the target goal-babble (Alg. 6) on the joints it
-shares with the source, then the source executes the same commands; pair i is each robot's
-observed (q̄, x) for command i (pairing rule ``same_command``).
+shares with the source, then the source takes the postures the target reached; pair i is
+each robot's observed (q̄, x) for movement i (pairing rule ``same_command``, checked alike).
 """
 import copy
 import os
@@ -47,8 +47,9 @@ from lpa_transfer._validation import check_float, check_int, check_x_bounds
 from lpa_transfer.robots import inverse_kinematics
 from lpa_transfer.robots.kinematics import execute, overlapping_limits, pad_transferred
 from lpa_transfer.robots.simulator import elapsed
-from lpa_transfer.exploration.guided import (check_target_range, explored_target,
-                                             followed_commands, guided_exploration)
+from lpa_transfer.exploration.guided import (check_source_follows, check_target_range,
+                                             explored_target, followed_commands,
+                                             guided_exploration)
 from lpa_transfer.exploration.guided import shared_limits
 
 PAIRING_RULES = ("same_command", "same_time_index", "same_task_point")
@@ -297,6 +298,22 @@ def settle(step, command, steps, check):
         run += chunk
 
 
+class SettlingStep:
+    """A robot's ``step(command, n_steps) -> state`` that, after ``n_steps``, steps on until the
+    robot has settled (:func:`settle` under ``check``), e.g. the source of guided exploration
+    taking the target's posture. ``settled`` says whether the last command settled within
+    ``check.max_settle_steps``; ``unsettled`` counts the commands that did not."""
+
+    def __init__(self, step, check):
+        self.step, self.check = step, check
+        self.settled, self.unsettled = True, 0
+
+    def __call__(self, command, n_steps):
+        state, self.settled, _ = settle(self.step, command, n_steps, self.check)
+        self.unsettled += not self.settled
+        return state
+
+
 class PairTally:
     """Counts a collection's checked and dropped pairs, the robots that did not settle and
     the residuals; ``summary()`` goes into the set's metadata (:func:`pair_check_line`)."""
@@ -356,21 +373,6 @@ def pair_check_line(metadata):
             f"(residual > {metadata['pair_tolerance']:g} {unit}); worst kept residual "
             f"{metadata['worst_residual']:.3g} {unit}; commands not settled: source "
             f"{metadata['unsettled_source']}, target {metadata['unsettled_target']}")
-
-
-def reached_residuals(source_rows, target_rows, n_shared):
-    """The pairing check's summary for guided pairs (rows (q̄, x)): how far apart the shared
-    joints the two robots reached for the same command are (rad). Reported, not enforced:
-    each row is what its robot reached, a consistent (q̄, x) of that robot (§6.4.2), and the
-    robots may lag their commands differently at goal babbling's pace."""
-    if len(source_rows):
-        residual = np.abs(source_rows[:, :n_shared] - target_rows[:, :n_shared]).max(axis=1)
-    else:
-        residual = np.zeros(0)
-    return dict(pairs_checked=len(residual), pairs_dropped=0, pair_tolerance=np.inf,
-                residual_unit="rad", worst_residual=float(residual.max(initial=0.0)),
-                median_residual=float(np.median(residual)) if len(residual) else 0.0,
-                worst_dropped_residual=0.0, unsettled_source=0, unsettled_target=0)
 
 
 def pair_residual(pairing_rule, source, target, source_state, target_state, offset, times):
@@ -507,66 +509,99 @@ def check_guided_exploration(babbling, source, target, source_joints, target_joi
 
 def collect_guided_correspondences(babbling, source, target, source_joints, target_joints,
                                    seconds, on_pair=None, should_stop=None, model=None,
-                                   target_range="shared"):
+                                   target_range="shared", source_follows="reached",
+                                   pair_check=None, source_settling=None,
+                                   names=("source", "target")):
     """Guided exploration (thesis §6.4.2, Alg. 7) as a correspondence collection.
 
-    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
-    target's task space); ``source``/``target`` are environments (Kinematics whose commands
-    run on the robots, e.g. :func:`lpa_transfer.robots.environment.stepped_environment`).
-    ``source_joints[i]`` of the source is ``target_joints[i]`` of the target (the shared
-    joints Q̄). The target goal-babbles for ``seconds`` simulated seconds moving the shared
-    joints only, its other joints at home, within ``target_range`` (``shared`` or ``own``
-    ranges, :mod:`lpa_transfer.exploration.guided`), learning ``model`` (default: a fresh
-    one; then ``babbling.model_``); the source then executes the same commands (clipped into
-    the shared ranges), its other joints at its home
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its
+    ``x_bounds`` in the target's task space); ``source``/``target`` are environments
+    (Kinematics whose commands run on the robots, e.g.
+    :func:`lpa_transfer.robots.environment.stepped_environment`). ``source_joints[i]`` of the
+    source is ``target_joints[i]`` of the target (the shared joints Q̄). The target
+    goal-babbles for ``seconds`` simulated seconds moving the shared joints only, its other
+    joints at home, within ``target_range`` (``shared`` or ``own`` ranges), learning ``model``
+    (default: a fresh one; then ``babbling.model_``); the source then takes, movement by
+    movement, the posture the target reached (``source_follows="reached"``) or the command it
+    was sent (``"command"``), clipped into the shared ranges, its other joints at its home
     (:func:`lpa_transfer.exploration.guided.guided_exploration`). Row i holds each robot's
-    observed (q̄, x) for command i: the positions its shared joints reached and its task
-    point; the pairs of the commands the source followed are the correspondences.
-    ``on_pair(index, source_row, target_row)`` sees each correspondence as it is made, as the
-    source executes command ``index``. ``should_stop()`` (checked before every command of
-    either robot) ends the collection early: only the commands both robots executed count
-    (none while the target is still babbling) and ``complete`` is False.
+    observed (q̄, x) for movement i.
 
-    Returns a :class:`CorrespondenceSet` of the correspondences: pairing rule
-    ``same_command``, features (``position``, ``ee_x``, …) with ``position`` the shared
-    joints only, ``sim_time`` the source's execution time on goal babbling's clock (commands
-    / ``steps_per_second``), and the hyperparameters in ``metadata``, with ``followed`` (N,)
-    bool and ``target_experience`` (N, d_c + m), the target's rows of all N commands, for
+    Every pair whose command lay in the shared ranges is checked as a ``same_command`` pair
+    (:class:`PairCheck`, ``pair_check``; its defaults when None): the largest difference of
+    the two robots' reached shared joints must be at most ``tolerance``, or the pair is
+    dropped (the target's row stays its own experience; ``on_bad_pair`` "retry" drops too:
+    the source has already had ``max_settle_steps`` to take the posture, if its environment
+    settles, e.g. a :class:`SettlingStep` passed again as ``source_settling`` so that its
+    unsettled commands are counted). More than ``max_bad_share`` dropped ends the collection
+    with a :class:`PairingError` naming ``names``, the rule and the residual.
+    ``on_pair(index, source_row, target_row)`` sees each kept pair as it is made (``index``
+    the movement's). ``should_stop()`` (checked before every command of either robot) ends the
+    collection early: only the movements both robots executed count (none while the target
+    is still babbling) and ``complete`` is False.
+
+    Returns a :class:`CorrespondenceSet` of the kept pairs: pairing rule ``same_command``,
+    features (``position``, ``ee_x``, …) with ``position`` the shared joints only,
+    ``sim_time`` the source's execution time on goal babbling's clock (movements /
+    ``steps_per_second``), and in ``metadata`` the hyperparameters, the check's tally
+    (:meth:`PairTally.summary`, with ``median_residual``), ``followed`` (N,) bool (kept pairs)
+    and ``target_experience`` (N, d_c + m), the target's rows of all N movements, for
     :func:`load_guided_exploration`; robot names are left empty for the caller.
     """
     check_float(seconds, "seconds", 0)
     check_target_range(target_range)
+    check_source_follows(source_follows)
+    check = PairCheck() if pair_check is None else pair_check
+    if not isinstance(check, PairCheck):
+        raise ValueError(f"pair_check must be a PairCheck, got {type(check).__name__}")
     limits = shared_limits(source, target, source_joints, target_joints)  # before a step
     low, high = check_x_bounds(babbling.x_bounds)
-    n_task = len(low)
-    target_rows, source_rows, followed = [], [], []
+    n_task, n_shared = len(low), len(source_joints)
+    tally = PairTally("same_command", check, names)
+    target_rows, source_rows, followed, kept_residuals = [], [], [], []
+    planned = []
 
     def on_source_row(row):
         index = len(source_rows)
         source_rows.append(row)
-        followed.append(bool(followed_commands(babbling.commands_[index], limits)[0]))
-        if on_pair is not None and followed[-1]:
-            on_pair(index, row, target_rows[index + 1])    # target_rows[0]: its home
+        target_row = target_rows[index + 1]                # target_rows[0]: its home
+        if not planned:       # the source starts once the target has babbled every movement
+            planned.append(int(followed_commands(babbling.commands_, limits).sum()))
+        kept = bool(followed_commands(babbling.commands_[index], limits)[0])
+        if kept:
+            residual = float(np.abs(row[:n_shared] - target_row[:n_shared]).max())
+            settled = True if source_settling is None else source_settling.settled
+            kept = tally.add(residual, {"source": settled, "target": True})
+            if kept:
+                kept_residuals.append(residual)
+            if tally.too_many_dropped(planned[0]):
+                raise tally.error()
+        followed.append(kept)
+        if on_pair is not None and kept:
+            on_pair(index, row, target_row)
 
     try:
         guided_exploration(
             babbling, _observing(source, source_joints, n_task, should_stop, on_source_row),
             _observing(target, target_joints, n_task, should_stop, target_rows.append),
-            source_joints, target_joints, seconds, model, target_range)
+            source_joints, target_joints, seconds, model, target_range, source_follows)
         complete = True
     except _Stopped:
         complete = False
+        if tally.dropped > check.max_bad_share * tally.checked:
+            raise tally.error() from None
     source_rows, experience = _rows(source_rows), _rows(target_rows[1:len(source_rows) + 1])
     followed = np.array(followed, dtype=bool)
     metadata = dict(guided_seconds=float(seconds), x_low=low, x_high=high,
                     source_joints=np.asarray(source_joints),
                     target_joints=np.asarray(target_joints), target_range=target_range,
+                    source_follows=source_follows,
                     n_subtargets=babbling.n_subtargets, sigma=babbling.sigma,
                     drift=babbling.drift, p_home=babbling.p_home,
                     steps_per_second=babbling.steps_per_second, seed=babbling.seed,
-                    followed=followed, target_experience=experience)
-    metadata.update(reached_residuals(source_rows[followed], experience[followed],
-                                      len(source_joints)))
+                    followed=followed, target_experience=experience, **tally.summary(),
+                    median_residual=float(np.median(kept_residuals)) if kept_residuals
+                    else 0.0)
     return CorrespondenceSet(
         source_rows[followed], experience[followed],
         pairing_rule="same_command", features=("position",) + TASK_FEATURES[:n_task],

@@ -6,8 +6,17 @@ T_guided with goal babbling (Alg. 6) moving only those joints, the others held a
 values; the source then executes the same sequence of shared commands q̄ on its own body,
 its other joints at its home (Alg. 7). Pairing the two by command gives the correspondences
 {(q̄, x_s)} and {(q̄, x_t)} in R^{d_c + m} from which a domain mapping f is learned (§6.4.1).
-On simulated robots (:mod:`lpa_transfer.robots.environment`) each side's q̄ is the joint
-positions that robot reached for the command, so the two may differ slightly.
+On simulated robots (:mod:`lpa_transfer.robots.environment`) a robot lags its command at
+goal babbling's pace, and two bodies lag differently; which command the source executes
+(``source_follows``; Alg. 7 does not say, on its kinematic robots the two are equal):
+
+* ``"reached"`` (default): the joint positions the target reached, so that both rows of a
+  pair are at the same q̄ (§6.5.1: "correspondences are easily defined in their original
+  motor spaces"), the source's posture settling where its environment lets it (e.g.
+  :class:`lpa_transfer.exploration.correspondences.SettlingStep`);
+* ``"command"``: the command the target was sent; both robots lag it, each its own way, so
+  a pair can join postures apart (up to 0.6 rad on the chapter 6 arms at 10 movements a
+  second; experiment1_diagnosis in the chapter 6 reference results).
 
 Which range the target explores (``target_range``; Alg. 7 does not say):
 
@@ -43,6 +52,7 @@ def shared_limits(source, target, source_joints, target_joints):
 
 
 TARGET_RANGES = ("shared", "own")
+SOURCE_FOLLOWS = ("reached", "command")
 
 
 class GuidedPairs(NamedTuple):
@@ -50,8 +60,8 @@ class GuidedPairs(NamedTuple):
 
     source: np.ndarray     # (N, d_c + m) the source's rows (q̄_s, x_s)
     target: np.ndarray     # (N, d_c + m) the target's rows (q̄_t, x_t): all its own experience
-    followed: np.ndarray   # (N,) bool: the source could execute command i (inside the shared
-    #                        ranges), so row i of both is a correspondence
+    followed: np.ndarray   # (N,) bool: the source could follow movement i (its command lay
+    #                        inside the shared ranges), so row i of both is a correspondence
 
     def correspondences(self):
         """``(source_pairs, target_pairs)``: the followed rows only."""
@@ -63,6 +73,14 @@ def check_target_range(target_range):
     if target_range not in TARGET_RANGES:
         raise ValueError(f"target_range must be one of {TARGET_RANGES}, got {target_range!r}")
     return target_range
+
+
+def check_source_follows(source_follows):
+    """``source_follows`` if it is one of :data:`SOURCE_FOLLOWS`; ValueError if not."""
+    if source_follows not in SOURCE_FOLLOWS:
+        raise ValueError(f"source_follows must be one of {SOURCE_FOLLOWS}, got "
+                         f"{source_follows!r}")
+    return source_follows
 
 
 def explored_target(target, target_joints, limits, target_range):
@@ -79,23 +97,28 @@ def followed_commands(commands, limits):
 
 
 def guided_exploration(babbling, source, target, source_joints, target_joints, seconds,
-                       model=None, target_range="shared"):
+                       model=None, target_range="shared", source_follows="reached"):
     """Alg. 7 with the target's goal babbling: a :class:`GuidedPairs` of (N, d_c + m) rows
-    (q̄, x), the same command behind row i of both.
+    (q̄, x), row i of both made for the target's movement i.
 
-    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its ``x_bounds`` in the
-    target's task space, its ``home`` None or over the shared joints); it explores the target
-    restricted to ``target_joints`` for ``seconds`` simulated seconds, learning ``model``
-    (default: a fresh one; afterwards ``babbling.model_``), within the ranges ``target_range``
-    names (module docstring). The source then executes the commands, clipped into the
-    shared ranges, with its ``source_joints``.
+    ``babbling`` is a :class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling` (its
+    ``x_bounds`` in the target's task space, its ``home`` None or over the shared joints); it
+    explores the target restricted to ``target_joints`` for ``seconds`` simulated seconds,
+    learning ``model`` (default: a fresh one; afterwards ``babbling.model_``), within the ranges
+    ``target_range`` names. The source then executes, with its ``source_joints``, what
+    ``source_follows`` names (the target's reached joints or its commands; module docstring),
+    clipped into the shared ranges. Movement i is followed (a correspondence) when its
+    command lay inside them; the reached joints of such a movement may lie a hair beyond (a
+    position-controlled joint overshoots its limit), hence the clipping.
     """
+    check_source_follows(source_follows)
     limits = shared_limits(source, target, source_joints, target_joints)
     babbling.start(explored_target(target, target_joints, limits, target_range), model)
     target_joint_values, target_points = babbling.run_for(seconds)
     commands = babbling.commands_
+    followed = target_joint_values if source_follows == "reached" else commands
     source_joint_values, source_points = execute(
-        restrict(source, source_joints, limits), np.clip(commands, limits[:, 0], limits[:, 1]))
+        restrict(source, source_joints, limits), np.clip(followed, limits[:, 0], limits[:, 1]))
     return GuidedPairs(np.hstack((source_joint_values, source_points)),
                        np.hstack((target_joint_values, target_points)),
                        followed_commands(commands, limits))

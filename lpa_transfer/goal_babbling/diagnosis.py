@@ -40,6 +40,10 @@ Variants of which rows are transferred (``variant`` of :func:`transferred_rows`)
   reached joint positions within <rad> of each other (Alg. 7 pairs by command; with lag the
   arms may be apart; §6.5.1: "correspondences are easily defined in their original motor
   spaces");
+* ``reached``: plain rows, guided exploration as the collector runs it by default: the source
+  takes the posture the target reached and settles there (``source_follows="reached"``,
+  :class:`lpa_transfer.exploration.correspondences.SettlingStep`), and pairs whose shared
+  joints still differ by more than :class:`PairCheck`'s tolerance are dropped;
 * ``weighted_<w>``: plain rows with k-NN weight w (the §6.6 suggestion "weighting transferred
   data less"; no retirement).
 
@@ -65,6 +69,7 @@ from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.goal_babbling.reaching import evaluation_points, reaching_errors
 from lpa_transfer.goal_babbling.transfer import transfer_experience
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
+from lpa_transfer.exploration.correspondences import PairCheck, SettlingStep
 from lpa_transfer.robots.environment import stepped_environment
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
@@ -77,10 +82,12 @@ ACCURACY_MM = (1.0, 5.0, 10.0)
 PHYSICS_STEPS = 100   # physics steps of 1 ms a movement (config.yaml: steps_per_sample)
 
 
-def environment(config, side, physics=None):
+def environment(config, side, physics=None, settle=False):
     """The ``side`` ("source" or "target") arm as babbling executes it: the analytic
     kinematics, or (``physics`` = (source file, target file)) a fresh pybullet arm at home
-    in position mode behind the same Kinematics (module docstring)."""
+    in position mode behind the same Kinematics (module docstring); ``settle``: each command
+    stepped on until the arm settles (:class:`SettlingStep` with :class:`PairCheck`'s
+    defaults)."""
     arm = config.arm(config.source_links if side == "source" else config.target_links)
     if physics is None:
         return arm
@@ -88,7 +95,8 @@ def environment(config, side, physics=None):
     sim = RobotSimulator(robot_urdf(robot), control_mode="position", physics_step=1e-3,
                          initial_positions=list(arm.home))
     sim.reset(list(arm.home))
-    return stepped_environment(arm, sim.step, PHYSICS_STEPS)
+    return stepped_environment(arm, SettlingStep(sim.step, PairCheck()) if settle else sim.step,
+                               PHYSICS_STEPS)
 
 
 @lru_cache(maxsize=4)
@@ -110,15 +118,30 @@ def source_rows(config, seed, physics=None):
 
 
 @lru_cache(maxsize=4)
-def guided_rows(config, seed, seconds, physics=None):
+def guided_rows(config, seed, seconds, physics=None, source_follows="command"):
     """Guided exploration (Alg. 7, §6.4) of ``seconds`` s with the target's babbling seed
     (``derived_seeds(seed)[1]``, as run.sh's collector): a GuidedPairs. Shorter T_guided are
-    prefixes of the longest (deterministic), as the graph uses them."""
+    prefixes of the longest (deterministic), as the graph uses them. ``source_follows``
+    "command" is the collector before 2026-12-06 (the tables of the diagnosis); "reached"
+    its default since: the source settles on the target's reached posture, and the pairs
+    apart by more than :class:`PairCheck`'s tolerance are not followed (dropped)."""
+    reached = source_follows == "reached"
     target = environment(config, "target", physics)
-    source = environment(config, "source", physics)
+    source = environment(config, "source", physics, settle=reached and physics is not None)
     babbler = GoalBabbling(target.task_box, seed=derived_seeds(seed)[1],
                            **dict(config.babbling))
-    return guided_exploration(babbler, source, target, [0, 1], [0, 1], seconds)
+    pairs = guided_exploration(babbler, source, target, [0, 1], [0, 1], seconds,
+                               source_follows=source_follows)
+    if reached:
+        apart = np.abs(pairs.source[:, :2] - pairs.target[:, :2]).max(axis=1)
+        pairs = pairs._replace(followed=pairs.followed & (apart <= PairCheck().tolerance))
+    return pairs
+
+
+def _guided_pairs(config, seed, seconds, variant, physics):
+    """guided_rows for ``variant`` (``reached``: the source follows the reached postures)."""
+    return guided_rows(config, seed, seconds, physics,
+                       "reached" if variant == "reached" else "command")
 
 
 def _n_commands(config, seconds):
@@ -171,7 +194,7 @@ def transferred_rows(config, seed, guided_seconds, variant="plain", method="lpa"
     cut to T_guided, as the graph does); ``info`` has the correspondence count, the mapping errors'
     mean/median and the shares within 1/5/10 mm of all mapped rows (before any filter)."""
     n_commands = _n_commands(config, guided_seconds)
-    pairs = guided_rows(config, seed, max(guided_seconds, guided_longest), physics)
+    pairs = _guided_pairs(config, seed, max(guided_seconds, guided_longest), variant, physics)
     _, src, tgt = prefix(pairs, n_commands)
     if variant.startswith("matched_pairs_"):   # correspondences whose arms' joints agree
         agree = np.abs(src[:, :2] - tgt[:, :2]).max(axis=1) <= float(variant.rsplit("_", 1)[1])
@@ -301,7 +324,7 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
     target = config.arm(config.target_links)
     points = _test_points(config)
     n_commands = _n_commands(config, guided_seconds)
-    pairs = guided_rows(config, seed, max(guided_seconds, guided_longest), physics)
+    pairs = _guided_pairs(config, seed, max(guided_seconds, guided_longest), variant, physics)
     own, src, tgt = prefix(pairs, n_commands)
     commands, task_points, weights, errors, info = transferred_rows(
         config, seed, guided_seconds, variant, method, guided_longest=guided_longest,
