@@ -9,7 +9,8 @@ from scipy.spatial import cKDTree
 from conftest import ROOT
 from test_lfd_robots import human_to_meka, human_to_pr2
 from lpa_transfer.lfd.correspondences import (JointMap, TaskFrame, babbling_limits,
-                                              collect_demonstrator_correspondences, mapping_error)
+                                              collect_demonstrator_correspondences, mapping_error,
+                                              task_point_residuals)
 from lpa_transfer.robots.kinematics import arm_kinematics
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
@@ -132,7 +133,10 @@ def test_correspondences_reach_the_same_task_point(human, meka, meka_pairs):
     assert c.n_kept >= 0.8 * c.n_tried
     q_h, x_h = c.demonstrator[:, :4], c.demonstrator[:, 4:]
     q_r, x_r = c.robot[:, :4], c.robot[:, 4:]
-    assert np.linalg.norm(forward_kinematics(human, full(q_h)) - x_h, axis=1).max() <= 1e-4
+    residuals = np.linalg.norm(forward_kinematics(human, full(q_h)) - x_h, axis=1)
+    assert residuals.max() <= 1e-4
+    np.testing.assert_allclose(task_point_residuals(human, c.demonstrator, 4), residuals,
+                               rtol=0, atol=1e-12)       # the check the batch reports
     assert np.linalg.norm(forward_kinematics(robot, full(q_r)) - x_r, axis=1).max() <= 1e-4
     np.testing.assert_allclose(x_h, frame.to_demonstrator(x_r), atol=1e-12)
     for q, arm in ((q_h, human), (q_r, robot)):

@@ -90,6 +90,9 @@ def test_the_bag_holds_demonstrations_and_executed_skills(smoke_run):
         ("human_arm", "pr2_right_arm"), ("human_arm", "meka_right_arm"),
         ("pr2_right_arm", "meka_right_arm")]
     assert all(b.source.rows == 1500 and b.target.cols == 7 for b in batches)
+    for b in batches:    # the pairing check: IK poses within 0.1 mm of their task points
+        assert b.residual_unit == "m" and b.pair_tolerance == 1e-4
+        assert b.pairs_checked - b.pairs_dropped == 1500 and 0 < b.worst_residual <= 1e-4
     for name, count in zip(ROBOTS, (8, 16)):   # every demonstration a skill was fitted on
         assert topics[f"/{name}/skill_demonstrations"].message_count == count
 

@@ -238,8 +238,23 @@ def babbling_limits(robot, demonstrator, joint_map, babble_range="shared"):
     return limits
 
 
+#: Default ``ik_tolerance`` (m) of :func:`collect_demonstrator_correspondences`: the pairing
+#: check of the chapter 4 collection (same_task_point).
+IK_TOLERANCE = 1e-4
+
+
+def task_point_residuals(body, rows, n_joints):
+    """(N,) ||FK(q) − x|| (m) of rows (q, x) of ``body`` (RobotParams or Kinematics; its first
+    ``n_joints`` joints, the others at home): how far each pair's inverse-kinematics pose is
+    from the task point it pairs at (same_task_point, §4.4.2) — the residual
+    :func:`collect_demonstrator_correspondences` keeps at most ``ik_tolerance``."""
+    rows = check.as_matrix(rows, "rows")
+    forward = arm_kinematics(body, n_joints, name="body").forward
+    return np.linalg.norm(np.asarray(forward(rows[:, :n_joints])) - rows[:, n_joints:], axis=1)
+
+
 def collect_demonstrator_correspondences(robot, demonstrator, joint_map, task_frame, n, seed,
-                            robot_home=None, demonstrator_home=None, ik_tolerance=1e-4,
+                            robot_home=None, demonstrator_home=None, ik_tolerance=IK_TOLERANCE,
                             babble_range="shared"):
     """Correspondences by motor babbling on the robot (§4.4.2, Fig. 4-4 steps 1-3).
 

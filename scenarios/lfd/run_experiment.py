@@ -43,6 +43,8 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.robots.kinematics import arm_kinematics  # noqa: E402
+from lpa_transfer.lfd.correspondences import (IK_TOLERANCE,  # noqa: E402
+                                              task_point_residuals)
 from lpa_transfer.lfd.experiment import Demonstration, collect_pairs, load_setup  # noqa: E402
 from lpa_transfer.lfd.report import graph_report, plot_letters  # noqa: E402
 from lpa_transfer.lfd.skills import (CONDITIONS, between, by_shape,  # noqa: E402
@@ -146,9 +148,18 @@ class Experiment(Node):
         """Correspondences body -> learner (babbling on the learner) and an LPA on them in
         lpa_mapping: (poses babbled, clusters)."""
         source, target, tried = collect_pairs(learner, body, self.pairs, self.seed)
+        residuals = task_point_residuals(body, source, learner.joint_map.n_joints)
         batch = CorrespondenceBatch(source_robot=body.name, target_robot=learner.robot.name,
                                     pairing_rule="same_task_point", source=to_matrix(source),
-                                    target=to_matrix(target))
+                                    target=to_matrix(target), pairs_checked=tried,
+                                    pairs_dropped=tried - len(source),
+                                    worst_residual=float(residuals.max()),
+                                    pair_tolerance=IK_TOLERANCE, residual_unit="m")
+        self.get_logger().info(
+            f"{body.name} -> {learner.robot.name}: pairing check: {tried} poses babbled, "
+            f"{len(source)} pairs kept (the rest out of {body.name}'s reach by more than "
+            f"{IK_TOLERANCE:g} m, or past the count); worst kept residual "
+            f"{residuals.max():.3g} m")
         batch.header.stamp, batch.header.frame_id = self.get_clock().now().to_msg(), "world"
         self.batch_pub.publish(batch)
         fitted = self.mapping.fit(model_id, source, target, source_robot=body.name,
