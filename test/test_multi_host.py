@@ -1,6 +1,7 @@
 """The 2-link graph over three network namespaces (scenarios/multi_host/run.sh, issue 30):
 the same results as on one host, every topic recorded, no route out, and a link that goes
-down for 2 s mid-collection ridden out (chapter 5 seed shares on two namespaces:
+down for 2 s mid-collection ridden out, a crashed mapping host restarted from its model files
+(chapter 5 seed shares on two namespaces:
 test_inverse_dynamics_variants.py). Skipped, with the script's one-line reason, where
 network namespaces cannot be made (not root, no ip netns)."""
 import json
@@ -74,6 +75,31 @@ def test_a_robots_host_link_down_for_2_s_is_ridden_out(tmp_path, one_host):
     assert "fault: host rob link up again" in result.stderr
     same_results(out, one_host)
 
+
+
+def test_a_killed_mapping_host_is_a_clear_error_and_a_restart_reruns_to_the_same_result(
+        tmp_path, one_host):
+    """--kill-map: the mapping host crashes once the model is fitted; the evaluation stops
+    with one FATAL line naming the service, nothing recorded before is lost, and the service
+    restarted on that host serves the model from disk, so the evaluation re-runs to the
+    one-host result."""
+    out = tmp_path / "run"
+    result = multi_host(out, "--kill-map")
+    assert "fault: host map's processes killed" in result.stderr
+    assert "error: transfer_evaluation failed" in result.stderr
+    failed = (out / "logs" / "transfer_evaluation.log").read_text()
+    assert "[FATAL]" in failed and "service /lpa_mapping/transfer is not available" in failed
+    assert "Traceback" not in failed
+    restarted = (out / "logs" / "lpa_mapping_restarted.log").read_text()
+    assert "serving 1 models from" in restarted and "two_link_source->two_link_target" \
+        in restarted
+    evaluation = json.loads((out / "rerun" / "evaluation.json").read_text())
+    expected = json.loads((one_host / "evaluation.json").read_text())
+    for key in ("mapping_rmse_m", "model_rmse_m", "n_correspondences", "n_experience"):
+        assert evaluation[key] == expected[key], key
+    recorded, reference = summary(out / "run.mcap"), summary(one_host / "run.mcap")
+    for topic in ("/correspondences", "/correspondence_batch"):   # nothing recorded is lost
+        assert recorded[topic].message_count == reference[topic].message_count, topic
 
 
 def test_on_host_reads_every_line_of_lpa_hosts_and_matches_patterns():

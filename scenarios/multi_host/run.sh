@@ -6,15 +6,22 @@
 # demo's graph, runs unchanged, each node on its host.
 #
 # Usage (as root): scenarios/multi_host/run.sh [--scenario inverse_dynamics]
-#                  [--link-down HOST AFTER SECONDS] [the scenario's run.sh arguments...]
+#                  [--link-down HOST AFTER SECONDS | --kill-map]
+#                  [the scenario's run.sh arguments...]
 #   e.g. --config scenarios/two_link_graph/smoke.yaml --out runs/multi_host
 #   --scenario inverse_dynamics --override scenarios/inverse_dynamics/demo.yaml: the default
 #   demo's graph (robots: youbot_sim, pincher_sim; mapping: lpa_mapping; learners: the
 #   recorder, the learners, the babbling collectors and the experiment)
 #   --link-down rob 0.2 2: the robots host's link goes down 0.2 s after the collector logged
 #   that it started babbling (discovery is done by then: the fault lands mid-collection), for
-#   2 s (a fault; hosts: rob, map, lrn). Leaves topology.txt in the run directory: each host's
-#   routes, this machine's own links, and the bytes each bridge port carried.
+#   2 s (a fault; hosts: rob, map, lrn).
+#   --kill-map: once the collector's model is fitted, every process of the mapping host is
+#   killed (SIGKILL, a crash); the evaluation then stops with a clear error naming the service
+#   it waited for, and the scenario fails. The script then restarts the host's lpa_mapping on
+#   the same model directory (it restores its models from disk) and the robot_sims, re-runs the
+#   evaluation against them into DIR/rerun, and exits with the re-run's status.
+# Leaves topology.txt in the run directory: each host's routes, this machine's own links, and
+# the bytes each bridge port carried.
 # Without root or network namespaces it says so in one line and exits 77 (skip).
 #
 # Network safety: the namespaces get addresses on 10.231.0.0/24 only, no default route and
@@ -30,16 +37,18 @@ ROOT=$(cd "$HERE/../.." && pwd)
 if [ "$(id -u)" != 0 ] || ! ip netns list >/dev/null 2>&1; then
     echo "skipped: network namespaces need root and iproute2's ip netns" >&2; exit 77
 fi
-LINK_DOWN=() SCENARIO=two_link_graph
+LINK_DOWN=() SCENARIO=two_link_graph KILL_MAP=0
 if [ "${1:-}" = --scenario ]; then SCENARIO=$2; shift 2; fi
 if [ "${1:-}" = --link-down ]; then LINK_DOWN=("$2" "$3" "$4"); shift 4; fi
+if [ "${1:-}" = --kill-map ]; then KILL_MAP=1; shift; fi
 case "$SCENARIO" in
     two_link_graph|inverse_dynamics) ;;
     *) echo "error: --scenario must be two_link_graph or inverse_dynamics, got '$SCENARIO'" >&2
        exit 2 ;;
 esac
-if [ ${#LINK_DOWN[@]} = 3 ] && [ "$SCENARIO" != two_link_graph ]; then
-    echo "error: --link-down is for the two_link_graph scenario (it waits for its collector)" >&2
+if { [ ${#LINK_DOWN[@]} = 3 ] || [ $KILL_MAP = 1 ]; } && [ "$SCENARIO" != two_link_graph ]; then
+    echo "error: --link-down and --kill-map are for the two_link_graph scenario (they wait for" \
+         "its collector)" >&2
     exit 2
 fi
 PREFIX=lpa$$
@@ -100,5 +109,61 @@ if [ ${#LINK_DOWN[@]} = 3 ]; then
      echo "[$(date +%T)] fault: host ${LINK_DOWN[0]} link up again" >&2) &
     FAULT=$!
 fi
+if [ $KILL_MAP = 1 ]; then
+    (until grep -qs "training RMSE" "$OUT/logs/correspondence_collector.log"; do sleep 0.02; done
+     pids=$(ip netns pids "${PREFIX}map")
+     kill -KILL $pids 2>/dev/null
+     echo "[$(date +%T)] fault: host map's processes killed (PIDs" $pids")" >&2) &
+    FAULT=$!
+fi
 bash "$ROOT/scenarios/$SCENARIO/run.sh" "$@"
-exit $?
+CODE=$?
+[ $KILL_MAP = 1 ] || exit $CODE
+
+# --kill-map: restart the mapping host's service on the same model directory, the robots, and
+# re-run the evaluation (run.sh has stopped every node by now).
+echo "[$(date +%T)] the scenario exited with $CODE; restarting lpa_mapping on host map" >&2
+wait "$FAULT"; FAULT=""
+mapfile -t PARAMS < <(python3 - "$ROOT" "$@" <<'PY'
+import os, sys
+root, args = sys.argv[1], sys.argv[2:]
+files = [os.path.join(root, "scenarios", "two_link_graph", "config.yaml")]
+for flag, value in zip(args, args[1:]):
+    if flag == "--config":
+        files[0] = os.path.realpath(value)
+    elif flag == "--override":
+        files.append(os.path.realpath(value))
+print("--ros-args")
+for path in files:
+    print("--params-file"); print(path)
+PY
+)
+RESTARTED=()
+restart() {   # restart HOST NAME ARGS...: a node on HOST again, its log logs/NAME_restarted.log
+    local host=$1 name=$2; shift 2
+    setsid ip netns exec "$PREFIX$host" env $LPA_HOST_ENV "$@" \
+        >"$OUT/logs/${name}_restarted.log" 2>&1 &
+    RESTARTED+=($!)
+}
+source "$ROOT/tools/env.sh"
+cd "$ROOT"
+restart map lpa_mapping python -m lpa_transfer_nodes.lpa_mapping "${PARAMS[@]}" \
+    -p "model_dir:=$OUT/models"
+for side in source target; do
+    restart rob "${side}_sim" python -m lpa_transfer_nodes.robot_sim "${PARAMS[@]}" \
+        -r "__ns:=/$side"
+done
+mkdir -p "$OUT/rerun"
+echo "[$(date +%T)] transfer_evaluation (re-run)" >&2
+ip netns exec "${PREFIX}lrn" env $LPA_HOST_ENV python \
+    "$ROOT/scenarios/two_link_graph/evaluate_transfer.py" "${PARAMS[@]}" \
+    -p "output_dir:=$OUT/rerun" -p "correspondence_file:=$OUT/correspondences.npz" \
+    >"$OUT/logs/transfer_evaluation_rerun.log" 2>&1
+RERUN=$?
+for pid in "${RESTARTED[@]}"; do kill -INT "$pid" 2>/dev/null; done
+for pid in "${RESTARTED[@]}"; do
+    for _ in $(seq 100); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null; wait "$pid" 2>/dev/null
+done
+echo "[$(date +%T)] re-run of the evaluation exited with $RERUN" >&2
+exit $RERUN
