@@ -13,6 +13,13 @@ exploration's target_range, LPA and guard are those of nao_poppy.yaml; Nao babbl
 physical, and its seeds are not the graph's. Not run in CI: one rate and seed takes ~20-60 s.
 Prints, per rate and seed, the reaching rate every 600 s for scratch, guided exploration
 alone (no transfer), LPA transfer, and LPA transfer behind the guard.
+
+``--override FILE`` merges a scenario override (e.g. nao_poppy_zup.yaml, the thesis' z-up
+scene) into nao_poppy.yaml. ``--accuracy`` prints instead what caps the transfer (issue 27):
+the transferred samples' error against Poppy's true kinematics (shares within 1 / 5 / 10 /
+15 mm), and the share of the reachable test points near (within the threshold of) a
+transferred sample, an accurate one (error within the threshold), and one of scratch's own
+samples after ``total`` s.
 """
 import argparse
 import os
@@ -40,6 +47,14 @@ from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padde
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml").read_text())
 CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded")
+
+
+def load_overrides(paths):
+    """nao_poppy.yaml with each override's nodes' ros__parameters merged in (later wins)."""
+    for path in paths:
+        for node, entry in (yaml.safe_load(Path(path).read_text()) or {}).items():
+            CONFIG.setdefault(node, {"ros__parameters": {}})["ros__parameters"].update(
+                entry.get("ros__parameters", {}))
 
 
 def params(node):
@@ -124,11 +139,49 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     return curves
 
 
+def accuracy(rate, seed, total=5000.0, guided=600.0):
+    """What caps the transfer (module docstring): a dict of the figures."""
+    from scipy.spatial import cKDTree
+    setup = prepare(rate, seed, total, guided)
+    target, threshold = setup.arms["target"], setup.threshold
+    errors = np.linalg.norm(np.asarray(target.forward(setup.commands)) - setup.task_points,
+                            axis=1)
+    scratch = setup.babbler("target", 1).start(target)
+    _, own_points = scratch.run_for(total)
+
+    def near(points):
+        return float(np.mean(np.isfinite(cKDTree(points).query(
+            setup.points, distance_upper_bound=threshold)[0]))) if len(points) else 0.0
+
+    return {"correspondences": int(setup.guided_pairs.followed.sum()),
+            "transferred": len(errors),
+            "error mean / median (mm)": (1e3 * errors.mean(), 1e3 * np.median(errors)),
+            **{f"within {mm:g} mm": float(np.mean(errors <= mm / 1e3))
+               for mm in (1, 5, 10, 15)},
+            "test points": len(setup.points),
+            "points near a transferred sample": near(setup.task_points),
+            "points near an accurate transferred sample":
+                near(setup.task_points[errors <= threshold]),
+            "points near scratch's own samples at the end": near(own_points)}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 3.0, 4.0, 10.0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--override", nargs="*", default=[])
+    parser.add_argument("--accuracy", action="store_true")
     args = parser.parse_args()
+    load_overrides(args.override)
+    if args.accuracy:
+        for rate in args.rates:
+            for seed in args.seeds:
+                figures = accuracy(rate, seed)
+                print(f"{rate:g} movements a simulated second, seed {seed}: " + "; ".join(
+                    f"{k} " + (" / ".join(f"{x:.3g}" for x in v) if isinstance(v, tuple)
+                               else f"{v:.3g}" if isinstance(v, float) else str(v))
+                    for k, v in figures.items()), flush=True)
+        return
     print("reaching rate; scratch at 600, 1200, ... 4800 s; the others at 600 s (right "
           "after the transfer), 1200, ... 4800 s")
     for rate in args.rates:
