@@ -14,8 +14,9 @@ check would have dropped.
 * chapter 6 guided exploration: experiment 1 (config.yaml, seed 0's babbling) and Nao -> Poppy
   (nao_poppy.yaml), residual the same, over the movements whose command the source could follow;
 * chapter 4 (lfd): ``same_task_point`` through the demonstrator's inverse kinematics (a
-  kinematic collection, no physics): residual = ||FK_H(q_H) − x_H|| (m), the pairs above
-  ``ik_tolerance`` dropped (unchanged by issue 31).
+  kinematic collection, no physics): residual = ||FK_H(q_H) − x_H|| (m), the poses whose
+  point the demonstrator does not reach within ``ik_tolerance`` dropped (unchanged by issue
+  31, one row: "before" = "after").
 
 Chapter 5 pairs by ``same_time_index`` with 10 steps a sample on both robots: 0 s by
 construction (its smoke test asserts it). Usage: ``python -m bench.pairing_residuals
@@ -34,8 +35,9 @@ from lpa_transfer.exploration.correspondences import (PairCheck, SettlingStep,
                                                       collect_guided_correspondences)
 from lpa_transfer.goal_babbling.experiment import derived_seeds
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
-from lpa_transfer.lfd.correspondences import task_point_residuals
-from lpa_transfer.lfd.experiment import collect_pairs, load_setup
+from lpa_transfer.lfd.correspondences import (collect_demonstrator_correspondences,
+                                              task_point_residuals)
+from lpa_transfer.lfd.experiment import MAX_BATCHES, load_setup
 from lpa_transfer.robots.environment import stepped_environment
 from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.params import load_robot_params
@@ -133,18 +135,22 @@ def guided(files, seed, seconds):
     return rows
 
 
-def lfd(n_pairs=20000, seed=0):
-    """Chapter 4: demonstrator -> each robot, as run_experiment.py's fit_model collects."""
+def lfd(n_poses=20000, seed=0):
+    """Chapter 4: the demonstrator -> each robot, one babbling batch of ``n_poses`` robot poses
+    as run_experiment.py's first batch (collect_pairs' seed ``seed * MAX_BATCHES``):
+    the poses whose point the demonstrator's IK reaches within IK_TOLERANCE are the pairs."""
     setup = load_setup(SCENARIOS / "lfd" / "frames.yaml")
     rows = {}
     for name, learner in setup.learners.items():
         start = time.perf_counter()
-        source, _, tried = collect_pairs(learner, setup.demonstrator, n_pairs, seed)
-        residual = task_point_residuals(setup.demonstrator, source, learner.joint_map.n_joints)
-        rows[name] = dict(pairs_checked=tried, pairs_dropped=None, n_pairs=len(source),
+        pairs = collect_demonstrator_correspondences(
+            learner.robot, setup.demonstrator, learner.joint_map, learner.task_frame, n_poses,
+            seed * MAX_BATCHES)
+        residual = task_point_residuals(setup.demonstrator, pairs.demonstrator,
+                                        learner.joint_map.n_joints)
+        rows[name] = dict(pairs_checked=pairs.n_tried, pairs_dropped=pairs.n_tried - pairs.n_kept,
                           worst_residual=float(residual.max()), residual_unit="m",
-                          wall_s=time.perf_counter() - start)
-        rows[name]["pairs_dropped"] = f"{tried - len(source)} (+ poses past the count)"
+                          n_pairs=pairs.n_kept, wall_s=time.perf_counter() - start)
     return rows
 
 
@@ -153,6 +159,7 @@ def main():
     parser.add_argument("--only", nargs="*", default=None)
     parser.add_argument("--guided-seconds", type=float, default=240.0,
                         help="experiment 1's longest T_guided (Nao -> Poppy: 600 s as §6.5.2)")
+    parser.add_argument("--lfd-poses", type=int, default=20000)
     args = parser.parse_args()
     gb = SCENARIOS / "goal_babbling"
     jobs = {
@@ -163,7 +170,7 @@ def main():
                                                    args.guided_seconds),
         "ch6 Nao->Poppy guided (seed 0)": lambda: guided(
             [gb / "nao_poppy.yaml"], derived_seeds(0)[1], 2.5 * args.guided_seconds),
-        "ch4 lfd (seed 0, 20 000 pairs)": lfd,
+        "ch4 lfd (seed 0, 20 000 poses)": lambda: lfd(args.lfd_poses),
     }
     for name, job in jobs.items():
         if args.only and not any(word in name for word in args.only):
