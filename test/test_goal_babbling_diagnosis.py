@@ -86,3 +86,21 @@ def test_physics_arms_lag_and_pair_residuals_appear():
     *_, info = dx.transferred_rows(config, 0, 5.0, "matched_pairs_0.001", guided_longest=5.0,
                                    physics=physics)
     assert info["n_correspondences"] == int(np.sum(residual <= 0.001)) < 50
+
+
+def test_reached_variant_settles_the_source_on_the_targets_postures():
+    """The collector's default (source_follows reached): the source settles on what the
+    target reached, so the pairs agree within PairCheck's tolerance where the command pairs
+    did not; the rows mapped are the same source experience."""
+    from conftest import ROOT
+    physics = tuple(str(ROOT / f"scenarios/robots/goal_babbling_{side}.toml")
+                    for side in ("source", "target"))
+    config = Experiment1(source_seconds=5.0, total_seconds=10.0)
+    pairs = dx.guided_rows(config, 0, 5.0, physics, "reached")
+    source, target = pairs.correspondences()
+    assert len(source) >= 48                                  # of 50 movements
+    assert np.abs(source[:, :2] - target[:, :2]).max() <= 1e-3
+    np.testing.assert_array_equal(pairs.target, dx.guided_rows(config, 0, 5.0, physics).target)
+    *_, info = dx.transferred_rows(config, 0, 5.0, "reached", guided_longest=5.0,
+                                   physics=physics)
+    assert info["n_correspondences"] == len(source)
