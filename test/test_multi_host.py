@@ -102,6 +102,22 @@ def test_a_killed_mapping_host_is_a_clear_error_and_a_restart_reruns_to_the_same
         assert recorded[topic].message_count == reference[topic].message_count, topic
 
 
+def test_the_mapping_round_trip_bench_runs_across_hosts(tmp_path):
+    """bench/mapping_round_trip.sh under --scenario mapping_round_trip: the client on the
+    learners' host discovers lpa_mapping on the mapping host, fits through it and times
+    transfers (the README's figures)."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
+    result = subprocess.run(["bash", str(SCRIPT), "--scenario", "mapping_round_trip", "--out",
+                             str(tmp_path / "run")], env=env, capture_output=True, text=True,
+                            timeout=300)
+    if result.returncode == 77:
+        pytest.skip(result.stderr.strip())
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "discovery: /lpa_mapping/transfer found" in result.stdout
+    for n_points in (1, 100, 10000):
+        assert f"transfer of {n_points:>5} points: median" in result.stdout
+
+
 def test_on_host_reads_every_line_of_lpa_hosts_and_matches_patterns():
     """graph.sh's on_host: LPA_HOSTS entries on several lines (as multi_host/run.sh writes
     them) all count, a name may be a shell pattern (the first match wins), no file name is

@@ -12,6 +12,8 @@
 #   --scenario inverse_dynamics --override scenarios/inverse_dynamics/demo.yaml: the default
 #   demo's graph (robots: youbot_sim, pincher_sim; mapping: lpa_mapping; learners: the
 #   recorder, the learners, the babbling collectors and the experiment)
+#   --scenario mapping_round_trip: bench/mapping_round_trip.sh, lpa_mapping on the mapping
+#   host and a client measuring discovery time and round trips on the learners' host
 #   --link-down rob 0.2 2: the robots host's link goes down 0.2 s after the collector logged
 #   that it started babbling (discovery is done by then: the fault lands mid-collection), for
 #   2 s (a fault; hosts: rob, map, lrn).
@@ -42,8 +44,10 @@ if [ "${1:-}" = --scenario ]; then SCENARIO=$2; shift 2; fi
 if [ "${1:-}" = --link-down ]; then LINK_DOWN=("$2" "$3" "$4"); shift 4; fi
 if [ "${1:-}" = --kill-map ]; then KILL_MAP=1; shift; fi
 case "$SCENARIO" in
-    two_link_graph|inverse_dynamics) ;;
-    *) echo "error: --scenario must be two_link_graph or inverse_dynamics, got '$SCENARIO'" >&2
+    two_link_graph|inverse_dynamics) SCRIPT=$ROOT/scenarios/$SCENARIO/run.sh ;;
+    mapping_round_trip) SCRIPT=$ROOT/bench/mapping_round_trip.sh ;;
+    *) echo "error: --scenario must be two_link_graph, inverse_dynamics or" \
+            "mapping_round_trip, got '$SCENARIO'" >&2
        exit 2 ;;
 esac
 if { [ ${#LINK_DOWN[@]} = 3 ] || [ $KILL_MAP = 1 ]; } && [ "$SCENARIO" != two_link_graph ]; then
@@ -116,7 +120,7 @@ if [ $KILL_MAP = 1 ]; then
      echo "[$(date +%T)] fault: host map's processes killed (PIDs" $pids")" >&2) &
     FAULT=$!
 fi
-bash "$ROOT/scenarios/$SCENARIO/run.sh" "$@"
+bash "$SCRIPT" "$@"
 CODE=$?
 [ $KILL_MAP = 1 ] || exit $CODE
 
