@@ -16,6 +16,7 @@ import time
 import numpy as np
 import rclpy
 
+from bench.bench_mapping_service import median_ms
 from lpa_transfer_nodes.mapping_client import MappingClient
 
 MODEL_ID = "round_trip"
@@ -31,15 +32,6 @@ def synthetic_pairs(n=1000, seed=0):
     target = source @ rotation.T
     target[:, 2] += 0.3 * np.sin(2 * source[:, 0])
     return source, target
-
-
-def percentiles_ms(function, calls):
-    times = []
-    for _ in range(calls):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return 1e3 * float(np.median(times)), 1e3 * float(np.percentile(times, 90))
 
 
 def main():
@@ -62,7 +54,7 @@ def main():
         for n_points in (1, 100, 10000):
             points = rng.uniform(-1.0, 1.0, (n_points, 4))
             mapping.transfer(MODEL_ID, points)                 # the first call warms up
-            median, p90 = percentiles_ms(lambda: mapping.transfer(MODEL_ID, points), args.calls)
+            median, p90 = median_ms(lambda: mapping.transfer(MODEL_ID, points), args.calls)
             print(f"transfer of {n_points:>5} points: median {median:.2f} ms, 90th percentile "
                   f"{p90:.2f} ms ({args.calls} calls)", flush=True)
         node.destroy_node()

@@ -558,23 +558,22 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
     low, high = check_x_bounds(babbling.x_bounds)
     n_task, n_shared = len(low), len(source_joints)
     tally = PairTally("same_command", check, names)
-    target_rows, source_rows, followed, kept_residuals = [], [], [], []
-    planned = []
+    target_rows, source_rows, followed = [], [], []
+    in_range = None    # which commands lie in the shared ranges: known once the source starts
 
     def on_source_row(row):
+        nonlocal in_range
         index = len(source_rows)
         source_rows.append(row)
         target_row = target_rows[index + 1]                # target_rows[0]: its home
-        if not planned:       # the source starts once the target has babbled every movement
-            planned.append(int(followed_commands(babbling.commands_, limits).sum()))
-        kept = bool(followed_commands(babbling.commands_[index], limits)[0])
+        if in_range is None:  # the source starts once the target has babbled every movement
+            in_range = followed_commands(babbling.commands_, limits)
+        kept = bool(in_range[index])
         if kept:
             residual = float(np.abs(row[:n_shared] - target_row[:n_shared]).max())
             settled = True if source_settling is None else source_settling.settled
             kept = tally.add(residual, {"source": settled, "target": True})
-            if kept:
-                kept_residuals.append(residual)
-            if tally.too_many_dropped(planned[0]):
+            if tally.too_many_dropped(int(in_range.sum())):
                 raise tally.error()
         followed.append(kept)
         if on_pair is not None and kept:
@@ -600,7 +599,7 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
                     drift=babbling.drift, p_home=babbling.p_home,
                     steps_per_second=babbling.steps_per_second, seed=babbling.seed,
                     followed=followed, target_experience=experience, **tally.summary(),
-                    median_residual=float(np.median(kept_residuals)) if kept_residuals
+                    median_residual=float(np.median(tally.residuals)) if tally.residuals
                     else 0.0)
     return CorrespondenceSet(
         source_rows[followed], experience[followed],

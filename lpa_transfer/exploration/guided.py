@@ -116,9 +116,9 @@ def guided_exploration(babbling, source, target, source_joints, target_joints, s
     babbling.start(explored_target(target, target_joints, limits, target_range), model)
     target_joint_values, target_points = babbling.run_for(seconds)
     commands = babbling.commands_
-    followed = target_joint_values if source_follows == "reached" else commands
+    to_follow = target_joint_values if source_follows == "reached" else commands
     source_joint_values, source_points = execute(
-        restrict(source, source_joints, limits), np.clip(followed, limits[:, 0], limits[:, 1]))
+        restrict(source, source_joints, limits), np.clip(to_follow, limits[:, 0], limits[:, 1]))
     return GuidedPairs(np.hstack((source_joint_values, source_points)),
                        np.hstack((target_joint_values, target_points)),
                        followed_commands(commands, limits))
