@@ -214,18 +214,10 @@ def test_the_graph_over_three_network_hosts_gives_the_same_curves(smoke_run, tmp
     lpa_mapping and the rest on three network namespaces (DDS over UDP on their bridge); the
     lock-step curves equal the one-host run's bit for bit and the bag holds the same topics.
     Skipped, with the script's one-line reason, where namespaces cannot be made."""
-    import os
-    import subprocess
-    from lpa_transfer_nodes.testing import unique_domain_id
+    from test_multi_host import run_multi_host
     out = tmp_path / "run"
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    result = subprocess.run(
-        ["bash", str(ROOT / "scenarios" / "multi_host" / "run.sh"), "--scenario",
-         "inverse_dynamics", "--override", str(SCENARIO / "smoke.yaml"), "--out", str(out)],
-        env=env, capture_output=True, text=True, timeout=480)
-    if result.returncode == 77:
-        pytest.skip(result.stderr.strip())
-    assert result.returncode == 0, result.stdout + result.stderr
+    run_multi_host("--scenario", "inverse_dynamics", "--override", SCENARIO / "smoke.yaml",
+                   "--out", out, timeout=480)
     assert (out / "learning_curves.csv").read_bytes() \
         == (smoke_run / "learning_curves.csv").read_bytes()
     assert sorted(summary(out / "run.mcap")) == sorted(summary(smoke_run / "run.mcap"))

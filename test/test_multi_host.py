@@ -20,14 +20,20 @@ SMOKE = ROOT / "scenarios" / "two_link_graph" / "smoke.yaml"
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
 
-def multi_host(out, *extra):
+def run_multi_host(*args, timeout=400):
+    """scenarios/multi_host/run.sh ARGS on a fresh ROS domain: its result once it succeeded;
+    a skip with the script's one-line reason where namespaces cannot be made."""
     env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    result = subprocess.run(["bash", str(SCRIPT), *extra, "--config", str(SMOKE), "--out",
-                             str(out)], env=env, capture_output=True, text=True, timeout=400)
+    result = subprocess.run(["bash", str(SCRIPT), *map(str, args)], env=env,
+                            capture_output=True, text=True, timeout=timeout)
     if result.returncode == 77:
         pytest.skip(result.stderr.strip())
     assert result.returncode == 0, result.stdout + result.stderr
     return result
+
+
+def multi_host(out, *extra):
+    return run_multi_host(*extra, "--config", SMOKE, "--out", out)
 
 
 @pytest.fixture(scope="module")
@@ -106,13 +112,8 @@ def test_the_mapping_round_trip_bench_runs_across_hosts(tmp_path):
     """bench/mapping_round_trip.sh under --scenario mapping_round_trip: the client on the
     learners' host discovers lpa_mapping on the mapping host, fits through it and times
     transfers (the README's figures)."""
-    env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    result = subprocess.run(["bash", str(SCRIPT), "--scenario", "mapping_round_trip", "--out",
-                             str(tmp_path / "run")], env=env, capture_output=True, text=True,
+    result = run_multi_host("--scenario", "mapping_round_trip", "--out", tmp_path / "run",
                             timeout=300)
-    if result.returncode == 77:
-        pytest.skip(result.stderr.strip())
-    assert result.returncode == 0, result.stdout + result.stderr
     assert "discovery: /lpa_mapping/transfer found" in result.stdout
     for n_points in (1, 100, 10000):
         assert f"transfer of {n_points:>5} points: median" in result.stdout
