@@ -31,7 +31,8 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 ROOT = Path(__file__).resolve().parents[1]
 
 import numpy as np  # noqa: E402
-import yaml  # noqa: E402
+
+from bench.scenario_params import node_params  # noqa: E402
 
 from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling  # noqa: E402
@@ -45,20 +46,13 @@ from lpa_transfer.learners.sensorimotor import make_sensorimotor_model  # noqa: 
 from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padded_rows,  # noqa: E402
                                                  transfer_experience)
 
-CONFIG = yaml.safe_load((ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml").read_text())
+#: nao_poppy.yaml, then the --override files (later ones win)
+CONFIG_FILES = [ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml"]
 CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded")
 
 
-def load_overrides(paths):
-    """nao_poppy.yaml with each override's nodes' ros__parameters merged in (later wins)."""
-    for path in paths:
-        for node, entry in (yaml.safe_load(Path(path).read_text()) or {}).items():
-            CONFIG.setdefault(node, {"ros__parameters": {}})["ros__parameters"].update(
-                entry.get("ros__parameters", {}))
-
-
 def params(node):
-    return CONFIG[node]["ros__parameters"]
+    return node_params(node, *CONFIG_FILES)
 
 
 def setting():
@@ -172,7 +166,7 @@ def main():
     parser.add_argument("--override", nargs="*", default=[])
     parser.add_argument("--accuracy", action="store_true")
     args = parser.parse_args()
-    load_overrides(args.override)
+    CONFIG_FILES.extend(args.override)
     if args.accuracy:
         for rate in args.rates:
             for seed in args.seeds:

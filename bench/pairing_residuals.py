@@ -27,8 +27,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 
+from bench.scenario_params import node_params
 from lpa_transfer.exploration.babbling import BabblingProgram
 from lpa_transfer.exploration.correspondences import (PairCheck, SettlingStep,
                                                       collect_correspondences,
@@ -47,15 +47,6 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
 BEFORE = PairCheck(max_settle_steps=0, tolerance=np.inf)     # the collector before issue 31
 AFTER = PairCheck()
-
-
-def node_params(node, *files):
-    """The ros__parameters of ``node`` in the yaml ``files`` (later ones override)."""
-    params = {}
-    for path in files:
-        params.update((yaml.safe_load(Path(path).read_text()).get(node) or {})
-                      .get("ros__parameters", {}))
-    return params
 
 
 def simulators(params, sim_params):
