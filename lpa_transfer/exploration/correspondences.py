@@ -275,6 +275,15 @@ class PairCheck:
             raise ValueError(f"max_bad_share must be a number in [0, 1], got {share!r}")
 
 
+def check_pair_check(pair_check):
+    """``pair_check``, or :class:`PairCheck`'s defaults when None; ValueError if it is not a
+    PairCheck."""
+    check = PairCheck() if pair_check is None else pair_check
+    if not isinstance(check, PairCheck):
+        raise ValueError(f"pair_check must be a PairCheck, got {type(check).__name__}")
+    return check
+
+
 class PairingError(RuntimeError):
     """The robots' samples cannot be made true correspondences under the pairing rule."""
 
@@ -402,9 +411,7 @@ def collect_correspondences(program, pairing_rule, source, target, step_source, 
     """
     features = check_features(features)
     check_int(steps_per_sample, "steps_per_sample", 1)
-    check = PairCheck() if pair_check is None else pair_check
-    if not isinstance(check, PairCheck):
-        raise ValueError(f"pair_check must be a PairCheck, got {type(check).__name__}")
+    check = check_pair_check(pair_check)
     source_commands, target_commands = planned_commands(program, pairing_rule, source, target)
     # a same_time_index pair is sampled on the move (§5.4.1): no settling
     settling = replace(check, max_settle_steps=0) if pairing_rule == "same_time_index" \
@@ -551,9 +558,7 @@ def collect_guided_correspondences(babbling, source, target, source_joints, targ
     check_float(seconds, "seconds", 0)
     check_target_range(target_range)
     check_source_follows(source_follows)
-    check = PairCheck() if pair_check is None else pair_check
-    if not isinstance(check, PairCheck):
-        raise ValueError(f"pair_check must be a PairCheck, got {type(check).__name__}")
+    check = check_pair_check(pair_check)
     limits = shared_limits(source, target, source_joints, target_joints)  # before a step
     low, high = check_x_bounds(babbling.x_bounds)
     n_task, n_shared = len(low), len(source_joints)
