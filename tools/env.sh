@@ -11,6 +11,12 @@ esac
 # Default discovery multicasts off the host.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42}
+# Fast DDS: shared memory with larger segments and UDP on loopback only (the profile says why).
+# A caller that chose its transports (FASTDDS_BUILTIN_TRANSPORTS, as the multi-host scenario
+# does for its UDP-only namespaces) or its own profile keeps them.
+if [ -z "${FASTDDS_BUILTIN_TRANSPORTS:-}" ]; then
+    export FASTRTPS_DEFAULT_PROFILES_FILE=${FASTRTPS_DEFAULT_PROFILES_FILE:-$_lpa_root/tools/fastdds_localhost.xml}
+fi
 export ROS_LOG_DIR=${ROS_LOG_DIR:-$_lpa_root/log/ros}
 # Thread oversubscription made sklearn 10-25x slower on 2 cores; one BLAS/OpenMP thread each.
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}

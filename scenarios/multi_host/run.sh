@@ -96,7 +96,7 @@ if [ "$SCENARIO" = two_link_graph ]; then
 else    # every other node (learners, collectors, experiment) on the learners' host
     export LPA_HOSTS="*_sim=${PREFIX}rob lpa_mapping=${PREFIX}map *=${PREFIX}lrn"
 fi
-export LPA_HOST_ENV="ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET FASTDDS_BUILTIN_TRANSPORTS=UDPv4"
+export LPA_HOST_ENV="-u FASTRTPS_DEFAULT_PROFILES_FILE ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET FASTDDS_BUILTIN_TRANSPORTS=UDPv4"
 OUT=$(python3 - "$ROOT" "$SCENARIO" "$@" <<'PY'
 import os, sys
 root, scenario, args = sys.argv[1], sys.argv[2], sys.argv[3:]

@@ -54,7 +54,7 @@ for seed in "${SEEDS[@]}"; do
         echo "error: could not make the network namespace for seed $seed" >&2; exit 1; }
     printf 'experiment:\n  ros__parameters:\n    seeds: [%s]\n' "$seed" >"$OUT/share_$seed.yaml"
     rm -rf "$OUT/seed$seed"
-    ip netns exec "$ns" env FASTDDS_BUILTIN_TRANSPORTS=UDPv4 \
+    ip netns exec "$ns" env -u FASTRTPS_DEFAULT_PROFILES_FILE FASTDDS_BUILTIN_TRANSPORTS=UDPv4 \
         bash "$ROOT/scenarios/inverse_dynamics/run.sh" "${ARGS[@]}" \
         --override "$OUT/share_$seed.yaml" --out "$OUT/seed$seed" >"$OUT/seed$seed.log" 2>&1 &
     PIDS+=($!)
