@@ -35,6 +35,24 @@ def smoke_run(tmp_path_factory):
     return out
 
 
+#: What `make demo` runs (demo.yaml), at the smoke size and as a share of the conditions.
+DEMO_SHAPE = ("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
+              "    conditions: [transfer-PA, own+transfer-LPA]\n")
+
+
+@pytest.fixture(scope="module")
+def demo_share(tmp_path_factory):
+    """The demo's shape on one host: (run directory, its override file, the run's result)."""
+    base = tmp_path_factory.mktemp("demo_share")
+    override = base / "demo_like.yaml"
+    override.write_text(DEMO_SHAPE)
+    out = base / "run"
+    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
+                          overrides=["smoke.yaml", str(override)], extra_args=["--progress"])
+    assert result.returncode == 0, result.stdout + result.stderr
+    return out, override, result
+
+
 def test_every_condition_learns_on_both_robots(smoke_run):
     results = json.loads((smoke_run / "results.json").read_text())
     curves = results["curves_m"]
@@ -179,20 +197,14 @@ def test_spline_interpolation_puts_the_transferred_data_on_the_task(smoke_run, t
     assert splined < 0.7 * sampled, (splined, sampled)
 
 
-def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, tmp_path):
+def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, demo_share):
     """What `make demo` runs (demo.yaml), at the smoke size and as a share of the conditions
     (reference results are joined from shares): only the youBot is a target (the Pincher
     learns from scratch to have experience to give), progress and the summary table reach the
     terminal. own+transfer-LPA runs right after transfer-PA instead of after three other
     conditions on the same learner and simulator nodes, and every curve repeats the full smoke
     run's to a relative 1e-6, merge_results' check (measured: the 16th digit differed)."""
-    override = tmp_path / "demo_like.yaml"
-    override.write_text("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
-                        "    conditions: [transfer-PA, own+transfer-LPA]\n")
-    out = tmp_path / "run"
-    result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
-                          overrides=["smoke.yaml", str(override)], extra_args=["--progress"])
-    assert result.returncode == 0, result.stdout + result.stderr
+    out, _, result = demo_share
     shown = result.stdout + result.stderr
     assert "seed 0 youbot star1 transfer-PA: trial 2/2 tracking error" in shown
     assert "seed 0 pincher star1 from scratch: trial 1/2" in shown
@@ -209,15 +221,17 @@ def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, tmp_
     assert "pincher as target" not in report and "youbot as target" in report
 
 
-def test_the_graph_over_three_network_hosts_gives_the_same_curves(smoke_run, tmp_path):
+def test_the_graph_over_three_network_hosts_gives_the_same_curves(demo_share, tmp_path):
     """Issue 30: scenarios/multi_host/run.sh --scenario inverse_dynamics puts the robot_sims,
     lpa_mapping and the rest on three network namespaces (DDS over UDP on their bridge); the
-    lock-step curves equal the one-host run's bit for bit and the bag holds the same topics.
-    Skipped, with the script's one-line reason, where namespaces cannot be made."""
+    lock-step curves of the demo's shape equal the one-host run's bit for bit and the bag
+    holds the same topics. Skipped, with the script's one-line reason, where namespaces
+    cannot be made."""
     from test_multi_host import run_multi_host
+    one_host, override, _ = demo_share
     out = tmp_path / "run"
     run_multi_host("--scenario", "inverse_dynamics", "--override", SCENARIO / "smoke.yaml",
-                   "--out", out, timeout=480)
+                   "--override", override, "--out", out, timeout=480)
     assert (out / "learning_curves.csv").read_bytes() \
-        == (smoke_run / "learning_curves.csv").read_bytes()
-    assert sorted(summary(out / "run.mcap")) == sorted(summary(smoke_run / "run.mcap"))
+        == (one_host / "learning_curves.csv").read_bytes()
+    assert sorted(summary(out / "run.mcap")) == sorted(summary(one_host / "run.mcap"))
