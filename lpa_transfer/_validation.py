@@ -6,7 +6,6 @@ caller (for example the mapping service) can hand the message straight back to i
 import numbers
 
 import numpy as np
-from sklearn.exceptions import NotFittedError  # a ValueError subclass
 
 
 def as_matrix(X, name):
@@ -69,7 +68,12 @@ def check_seed(value):
 
 
 def check_fitted(model, attribute="coef_"):
+    """scikit-learn's NotFittedError (a ValueError) unless ``model`` has ``attribute``.
+
+    scikit-learn is imported here, not with the module: the nodes that only check inputs
+    (robot_sim, recorder, player, markers) then start without loading it."""
     if not hasattr(model, attribute):
+        from sklearn.exceptions import NotFittedError
         raise NotFittedError(f"this {type(model).__name__} is not fitted yet: call "
                              "fit(source, target) first")
 
