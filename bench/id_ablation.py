@@ -9,11 +9,13 @@ Usage, from the repository root::
 
 ``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
 robots on both stars for the conditions of §5.5.3 (uninitialised, random, transfer-PA,
-transfer-LPA) and ours (own+transfer-PA/-LPA). It follows ``bench/id_transfer_headroom.py``
-(the library's simulator, PID and LWPR with the graph's settings; the babbling of experiment
-seed N, paired by time index; the source's 15 trials from scratch transferred). Learning from
-scratch starts at rest at the star's centre, so it is the same run for every seed (the graph's
-``start_noise`` is not used here). ``report`` joins the seeds of each set-up: per robot and
+transfer-LPA) and ours (own+transfer-PA/-LPA). It computes what the graph's experiment
+does (run_experiment.py: one babbling session over both stars, models fitted on all its
+pairs, the source's 15 trials from scratch transferred) with the library's simulator, PID and
+LWPR (``bench/id_transfer_headroom.py``'s StarRobot); on the smoke size with both stars and
+no start noise its curves equal the graph's (reference_results/ablation/README.md). Learning
+from scratch starts at rest at the star's centre, so it is the same run for every seed (the
+graph's ``start_noise`` is not used here). ``report`` joins the seeds of each set-up: per robot and
 star, the first-trial error and the trials to convergence of every condition under both rules
 (within 10 % of scratch's final error; each curve by its own plateau), and per robot the
 training time saved as §5.5.3 counts it (both stars, 14.4 s of babbling charged to the
@@ -26,6 +28,7 @@ report. Each run is deterministic: the same set-up and seed give the same curves
 """
 import argparse
 import copy
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -33,7 +36,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from bench.id_transfer_headroom import CONFIG, StarRobot, babble
+from bench.id_transfer_headroom import CONFIG, StarRobot
+from lpa_transfer.exploration.babbling import BabblingProgram, box_around
+from lpa_transfer.exploration.correspondences import collect_correspondences
+from lpa_transfer.robots.control import PID, start_servo
 from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
                                                     convergence_table, paired_against)
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
@@ -79,47 +85,89 @@ def with_volume(config):
     return config
 
 
+def babble_session(config, robots, seed):
+    """The seed's correspondences of every star as the graph collects them: one babbling
+    session per robot on one simulator, Star 2's collector going on from where Star 1's left
+    the arm (each collector first commands its star's centre pose for one sample period,
+    ``collect_correspondences``); {robot: (rows of all stars, star1's first)}."""
+    common = config["/babbling/*"]["ros__parameters"]
+    stars = config["experiment"]["ros__parameters"]["stars"]
+    names = list(robots[stars[0]])
+    sims = {name: robots[stars[0]][name].sim for name in names}      # one arm each
+    for name in names:
+        sims[name].reset(robots[stars[0]][name].kinematics.home)
+    rows = {name: [] for name in names}
+    for k, star in enumerate(stars):
+        own = config[f"/babbling/{star}"]["ros__parameters"]
+        program = BabblingProgram(common["program"], common["n_segments"],
+                                  common["samples_per_segment"], 10 * seed + k,
+                                  time_law=common.get("time_law", "linear"))
+        kinematics, steps = [], []
+        for side, name in zip(("source", "target"), names):
+            robot = robots[star][name]
+            kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
+                robot.kinematics, own[f"{side}_task_halfwidth"])))
+            steps.append(start_servo(sims[name].step, robot.params.n_joints,
+                                     PID.from_gains(common[f"{side}_pid"])).step)
+        pairs = collect_correspondences(program, common["pairing_rule"], *kinematics, *steps,
+                                        common["steps_per_sample"], tuple(common["features"]))
+        rows[names[0]].append(pairs.source)
+        rows[names[1]].append(pairs.target)
+    return {name: np.vstack(parts) for name, parts in rows.items()}
+
+
 def run(setup, seed, n_trials, config_path=CONFIG):
-    """{"robot/star/condition": curve (mm per trial)} of one set-up and experiment seed."""
+    """{"robot/star/condition": curve (mm per trial)} of one set-up and experiment seed, as
+    the graph's experiment (run_experiment.py) computes them: the pairs of both stars fit one
+    PA and one LPA model per direction, 'random' is the target's babbling of both stars, and
+    each star's transferred data are the source's 15 trials of that star from scratch."""
     switches = SETUPS[setup]
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
         config = with_volume(config)
     experiment = config["experiment"]["ros__parameters"]
-    names = experiment["robots"]
+    names = experiment["robots"]                       # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])
     interpolation = switches.get("interpolation", "none")
     line = config["/babbling/*"]["ros__parameters"]["samples_per_segment"]
+    robots = {star: {name: StarRobot(config, name, star, switches.get("actuator", "torque"))
+                     .configure(config, name, star, switches.get("time_law"),
+                                switches.get("lwpr"))
+                     for name in names} for star in experiment["stars"]}
+    dt = robots[experiment["stars"][0]][names[0]].dt
+    pairs = {name: interpolated(rows, interpolation, line, dt)
+             for name, rows in babble_session(config, robots, seed).items()}
+    models = {}
+    for target in names:
+        source = next(name for name in names if name != target)
+        n_source = robots[experiment["stars"][0]][source].params.n_joints
+        models[target] = {
+            "PA": ProcrustesAnalysis(**fit).fit(pairs[source], pairs[target]),
+            "LPA": LocalProcrustesAnalysis(
+                n_min=experiment["n_min"], c_min=experiment["c_min"],
+                cluster_dims=list(range(2 * n_source)), random_state=seed,
+                **fit
+            ).fit(pairs[source], pairs[target])}
     curves = {}
     for star in experiment["stars"]:
-        robots = {name: StarRobot(config, name, star, switches.get("actuator", "torque"))
-                  .configure(config, name, star, switches.get("time_law"), switches.get("lwpr"))
-                  for name in names}
-        dt = robots[names[0]].dt
-        pairs = dict(zip(names, babble(config, [robots[n] for n in names], star, seed)))
-        pairs = {name: interpolated(rows, interpolation, line, dt) for name, rows in pairs.items()}
         experience = {}
         for name in names:          # learning from scratch: the uninitialised curve and the
-            errors, experience[name] = robots[name].trials(robots[name].learner(), n_trials)
-            curves[f"{name}/{star}/uninitialised"] = [1e3 * e for e in errors]   # experience
+            robot = robots[star][name]                                        # experience
+            errors, experience[name] = robot.trials(robot.learner(), n_trials)
+            curves[f"{name}/{star}/uninitialised"] = [1e3 * e for e in errors]
         for target in names:
             source = next(name for name in names if name != target)
-            n_source = robots[source].params.n_joints
-            models = {"PA": ProcrustesAnalysis(**fit),
-                      "LPA": LocalProcrustesAnalysis(
-                          n_min=experiment["n_min"], c_min=experiment["c_min"],
-                          cluster_dims=list(range(2 * n_source)), random_state=0, **fit)}
+            robot = robots[star][target]
             source_experience = interpolated(experience[source], interpolation,
-                                             len(robots[source].trajectory[0]), dt)
+                                             len(robots[star][source].trajectory[0]), dt)
             initial = {"random": pairs[target]}
-            for name, model in models.items():
-                initial[f"transfer-{name}"] = model.fit(pairs[source], pairs[target]).transfer(
-                    source_experience)
-            for name in models:     # the source's experience, then the own babbling
-                initial[f"own+transfer-{name}"] = np.vstack((initial[f"transfer-{name}"],
-                                                             pairs[target]))
+            for method, model in models[target].items():
+                initial[f"transfer-{method}"] = model.transfer(source_experience)
+            for method in models[target]:      # the source's experience, then the own babbling
+                initial[f"own+transfer-{method}"] = np.vstack((initial[f"transfer-{method}"],
+                                                               pairs[target]))
             for condition, samples in initial.items():
-                errors = robots[target].trials(robots[target].learner(samples), n_trials)[0]
+                errors = robot.trials(robot.learner(samples), n_trials)[0]
                 curves[f"{target}/{star}/{condition}"] = [1e3 * e for e in errors]
     return curves
 
