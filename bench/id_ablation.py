@@ -5,7 +5,7 @@ alone and all together, in process, with the tables the thesis reports (§5.5.3)
 Usage, from the repository root::
 
     python -m bench.id_ablation run --setup S --seed N [--trials 15] [--out DIR]
-    python -m bench.id_ablation report [--out DIR] [--setups S ...]
+    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary]
 
 ``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
 robots on both stars for the conditions of §5.5.3 (uninitialised, random, transfer-PA,
@@ -230,6 +230,44 @@ def report(out, setups):
     return "\n".join(lines)
 
 
+def summary(out, setups):
+    """One table per target robot, one row per set-up: learning from scratch's trials to
+    convergence and first-trial error per star, the thesis conditions' first-trial errors, and
+    the time saved per condition under both rules ("scratch rule / plateau")."""
+    lines = []
+    for robot in ("youbot", "pincher"):
+        lines += [f"### {robot} as target ({THESIS[robot]['scratch']} trials from scratch, "
+                  f"transfer saves {THESIS[robot]['transfer']}, random {THESIS[robot]['random']}"
+                  f" in the thesis)", "",
+                  "| set-up | seeds | scratch converges (S1 / S2) | trial 1, S1: scratch / random "
+                  "/ PA / LPA (mm) | trial 1, S2 | saved: random | transfer-PA | transfer-LPA "
+                  "| own+transfer-PA | own+transfer-LPA |", "|---" * 10 + "|"]
+        for setup in setups:
+            curves, seeds = load(out, setup)
+            if not curves:
+                continue
+            stars = sorted({k.split("/")[1] for k in curves})
+            n_trials = len(next(iter(curves.values()))[0])
+            metres = {k: np.asarray(v) / 1e3 for k, v in curves.items()}
+            tables = {rule: convergence_table(metres, [robot], stars, TOLERANCE,
+                                              BABBLING_SECONDS, rule=rule)
+                      for rule in ("scratch", "plateau")}
+            converged = {(s, c): k for _, s, c, k, _ in tables["scratch"][0]}
+            scratch = " / ".join(str(converged[s, "uninitialised"])
+                                 if converged[s, "uninitialised"] <= n_trials else f"> {n_trials}"
+                                 for s in stars)
+            firsts = [" / ".join(f"{np.mean(curves[f'{robot}/{s}/{c}'], axis=0)[0]:.1f}"
+                                 for c in ("uninitialised", "random", "transfer-PA",
+                                           "transfer-LPA")) for s in stars]
+            saved = [" / ".join(f"{100 * tables[rule][1][robot][c]:.0f}"
+                                for rule in ("scratch", "plateau")) + " %"
+                     for c in CONDITIONS[1:]]
+            lines.append(f"| {setup} | {len(seeds)} | {scratch} | " + " | ".join(firsts + saved)
+                         + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -241,9 +279,11 @@ def main(argv=None):
     many = sub.add_parser("report")
     many.add_argument("--out", type=Path, default=Path("runs/id_ablation"))
     many.add_argument("--setups", nargs="+", default=list(SETUPS))
+    many.add_argument("--summary", action="store_true",
+                      help="one table per robot across the set-ups instead of one per set-up")
     args = parser.parse_args(argv)
     if args.command == "report":
-        print(report(args.out, args.setups))
+        print((summary if args.summary else report)(args.out, args.setups))
         return 0
     curves = run(args.setup, args.seed, args.trials)
     path = args.out / args.setup / f"seed_{args.seed}.json"
