@@ -28,18 +28,15 @@ report. Each run is deterministic: the same set-up and seed give the same curves
 """
 import argparse
 import copy
-import dataclasses
 import json
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import yaml
 
-from bench.id_transfer_headroom import CONFIG, StarRobot
-from lpa_transfer.exploration.babbling import BabblingProgram, box_around
-from lpa_transfer.exploration.correspondences import collect_correspondences
-from lpa_transfer.robots.control import PID, start_servo
+from bench.id_transfer_headroom import CONFIG, StarRobot, babble
 from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
                                                     convergence_table, paired_against)
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
@@ -89,30 +86,16 @@ def babble_session(config, robots, seed):
     """The seed's correspondences of every star as the graph collects them: one babbling
     session per robot on one simulator, Star 2's collector going on from where Star 1's left
     the arm (each collector first commands its star's centre pose for one sample period,
-    ``collect_correspondences``); {robot: (rows of all stars, star1's first)}."""
-    common = config["/babbling/*"]["ros__parameters"]
+    ``collect_correspondences``); {robot: rows of all stars, Star 1's first}."""
     stars = config["experiment"]["ros__parameters"]["stars"]
     names = list(robots[stars[0]])
-    sims = {name: robots[stars[0]][name].sim for name in names}      # one arm each
-    for name in names:
-        sims[name].reset(robots[stars[0]][name].kinematics.home)
     rows = {name: [] for name in names}
     for k, star in enumerate(stars):
-        own = config[f"/babbling/{star}"]["ros__parameters"]
-        program = BabblingProgram(common["program"], common["n_segments"],
-                                  common["samples_per_segment"], 10 * seed + k,
-                                  time_law=common.get("time_law", "linear"))
-        kinematics, steps = [], []
-        for side, name in zip(("source", "target"), names):
-            robot = robots[star][name]
-            kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
-                robot.kinematics, own[f"{side}_task_halfwidth"])))
-            steps.append(start_servo(sims[name].step, robot.params.n_joints,
-                                     PID.from_gains(common[f"{side}_pid"])).step)
-        pairs = collect_correspondences(program, common["pairing_rule"], *kinematics, *steps,
-                                        common["steps_per_sample"], tuple(common["features"]))
-        rows[names[0]].append(pairs.source)
-        rows[names[1]].append(pairs.target)
+        arms = [SimpleNamespace(kinematics=robots[star][name].kinematics,
+                                params=robots[star][name].params,
+                                sim=robots[stars[0]][name].sim) for name in names]  # one arm each
+        for name, part in zip(names, babble(config, arms, star, seed, reset=k == 0)):
+            rows[name].append(part)
     return {name: np.vstack(parts) for name, parts in rows.items()}
 
 

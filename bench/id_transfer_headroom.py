@@ -101,9 +101,10 @@ class StarRobot:
         return errors, np.vstack(experience)
 
 
-def babble(config, robots, star, seed):
+def babble(config, robots, star, seed, reset=True):
     """The seed's correspondences near ``star``: (source rows, target rows) as the graph's
-    collector /babbling/<star> makes them (source = the config's source robot)."""
+    collector /babbling/<star> makes them (source = the config's source robot). ``reset``:
+    the robots start at rest at the star's centre (else where their simulators are)."""
     common = config["/babbling/*"]["ros__parameters"]
     own = config[f"/babbling/{star}"]["ros__parameters"]
     k = config["experiment"]["ros__parameters"]["stars"].index(star)
@@ -114,7 +115,8 @@ def babble(config, robots, star, seed):
     for side, robot in zip(("source", "target"), robots):
         kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
             robot.kinematics, own[f"{side}_task_halfwidth"])))
-        robot.sim.reset(robot.kinematics.home)
+        if reset:
+            robot.sim.reset(robot.kinematics.home)
         steps.append(start_servo(robot.sim.step, robot.params.n_joints,
                                  PID.from_gains(common[f"{side}_pid"])).step)
     pairs = collect_correspondences(program, common["pairing_rule"], *kinematics, *steps,
