@@ -62,6 +62,8 @@ SETUPS = {
     # spread (ours: the star's spread), alone and with the reference library's zero answer
     "narrow_fields": {"lwpr": {"init_D": 30.0}},
     "narrow_fields_zero": {"lwpr": {"init_D": 30.0, "empty_prediction": "zero"}},
+    # the reference library's zero answer (factor 6) with spline correspondences (factor 4)
+    "zero_spline": {"lwpr": {"empty_prediction": "zero"}, "interpolation": "spline"},
 }
 #: Thesis §5.5.3 (youBot) and the ICRA 2018 paper (Pincher): trials to convergence of learning
 #: from scratch on (Star 1, Star 2) and the time saved by transfer / by random initialisation.
