@@ -71,6 +71,8 @@ THESIS = {"youbot": {"scratch": "9 / > 20", "transfer": "63 %", "random": "up to
           "pincher": {"scratch": "-", "transfer": "58.7 % (ICRA 2018)", "random": "15.8 % (ICRA 2018)"}}
 BABBLING_SECONDS = 14.4
 TOLERANCE = 0.1
+#: The convergence rules of the tables (factor 7): analysis.convergence_table's ``rule``.
+RULES = ("scratch", "plateau")
 
 
 def with_volume(config):
@@ -168,25 +170,45 @@ def load(out, setup):
     return ({k: [r["curves"][k] for r in runs] for k in keys}, [r["seed"] for r in runs])
 
 
+def analysed(out, setup, robots=None):
+    """One set-up's runs and their convergence tables under both rules, or None when it has
+    no runs: a namespace of ``curves`` (mm), ``seeds``, ``robots`` (youBot first unless
+    given), ``stars``, ``n_trials``, ``metres`` (the curves in m) and ``tables`` (rule ->
+    :func:`convergence_table`'s rows and savings)."""
+    curves, seeds = load(out, setup)
+    if not curves:
+        return None
+    robots = robots or sorted({k.split("/")[0] for k in curves}, reverse=True)
+    stars = sorted({k.split("/")[1] for k in curves})
+    metres = {k: np.asarray(v) / 1e3 for k, v in curves.items()}
+    tables = {rule: convergence_table(metres, robots, stars, TOLERANCE, BABBLING_SECONDS,
+                                      rule=rule) for rule in RULES}
+    return SimpleNamespace(curves=curves, seeds=seeds, robots=robots, stars=stars,
+                           n_trials=len(next(iter(curves.values()))[0]), metres=metres,
+                           tables=tables)
+
+
+def trials_text(k, n_trials):
+    """Trials to convergence as the tables print them: "> n" when the curve never got there."""
+    return str(k) if k <= n_trials else f"> {n_trials}"
+
+
 def report(out, setups):
     """The ablation's tables as text."""
     lines = []
     for setup in setups:
-        curves, seeds = load(out, setup)
-        if not curves:
+        result = analysed(out, setup)
+        if result is None:
             continue
-        robots = sorted({k.split("/")[0] for k in curves}, reverse=True)   # youbot first
-        stars = sorted({k.split("/")[1] for k in curves})
-        n_trials = len(next(iter(curves.values()))[0])
+        n_trials, stars = result.n_trials, result.stars
         lines += [f"## {setup}: {json.dumps(SETUPS[setup])}", "",
-                  f"{len(seeds)} seed(s) {seeds}, {n_trials} trials; mm, mean over the seeds", ""]
-        metres = {k: np.asarray(v) / 1e3 for k, v in curves.items()}
-        tables = {rule: convergence_table(metres, robots, stars, TOLERANCE, BABBLING_SECONDS,
-                                          rule=rule) for rule in ("scratch", "plateau")}
+                  f"{len(result.seeds)} seed(s) {result.seeds}, {n_trials} trials; mm, mean over "
+                  f"the seeds", ""]
         trials = {rule: {(r, s, c): k for r, s, c, k, _ in rows}
-                  for rule, (rows, _) in tables.items()}
-        paired = paired_against(metres, robots, stars) if len(seeds) > 1 else {}
-        for robot in robots:
+                  for rule, (rows, _) in result.tables.items()}
+        paired = (paired_against(result.metres, result.robots, stars) if len(result.seeds) > 1
+                  else {})
+        for robot in result.robots:
             lines.append(f"| {robot} | " + " | ".join(
                 f"{star} trial 1 | trial {n_trials} | conv. (scratch rule) | conv. (plateau)"
                 for star in stars) + " | saved (scratch rule) | saved (plateau) |")
@@ -194,13 +216,12 @@ def report(out, setups):
             for condition in CONDITIONS:
                 cells = []
                 for star in stars:
-                    mean = np.mean(curves[f"{robot}/{star}/{condition}"], axis=0)
-                    conv = [trials[rule][robot, star, condition] for rule in ("scratch", "plateau")]
+                    mean = np.mean(result.curves[f"{robot}/{star}/{condition}"], axis=0)
                     cells += [f"{mean[0]:.2f}", f"{mean[-1]:.2f}",
-                              *[str(k) if k <= n_trials else f"> {n_trials}" for k in conv]]
+                              *[trials_text(trials[rule][robot, star, condition], n_trials)
+                                for rule in RULES]]
                 saved = ["-", "-"] if condition == "uninitialised" else [
-                    f"{100 * tables[rule][1][robot][condition]:.1f} %"
-                    for rule in ("scratch", "plateau")]
+                    f"{100 * result.tables[rule][1][robot][condition]:.1f} %" for rule in RULES]
                 lines.append(f"| {condition} | " + " | ".join(cells + saved) + " |")
             thesis = THESIS[robot]
             lines += ["", f"thesis ({robot}): scratch converges in {thesis['scratch']} trials "
@@ -219,36 +240,29 @@ def summary(out, setups):
     """One table per target robot, one row per set-up: learning from scratch's trials to
     convergence and first-trial error per star, the thesis conditions' first-trial errors, and
     the time saved per condition under both rules ("scratch rule / plateau")."""
+    robots = ("youbot", "pincher")
+    runs = {setup: analysed(out, setup, list(robots)) for setup in setups}
     lines = []
-    for robot in ("youbot", "pincher"):
+    for robot in robots:
         lines += [f"### {robot} as target ({THESIS[robot]['scratch']} trials from scratch, "
                   f"transfer saves {THESIS[robot]['transfer']}, random {THESIS[robot]['random']}"
                   f" in the thesis)", "",
                   "| set-up | seeds | scratch converges (S1 / S2) | trial 1, S1: scratch / random "
                   "/ PA / LPA (mm) | trial 1, S2 | saved: random | transfer-PA | transfer-LPA "
                   "| own+transfer-PA | own+transfer-LPA |", "|---" * 10 + "|"]
-        for setup in setups:
-            curves, seeds = load(out, setup)
-            if not curves:
+        for setup, result in runs.items():
+            if result is None:
                 continue
-            stars = sorted({k.split("/")[1] for k in curves})
-            n_trials = len(next(iter(curves.values()))[0])
-            metres = {k: np.asarray(v) / 1e3 for k, v in curves.items()}
-            tables = {rule: convergence_table(metres, [robot], stars, TOLERANCE,
-                                              BABBLING_SECONDS, rule=rule)
-                      for rule in ("scratch", "plateau")}
-            converged = {(s, c): k for _, s, c, k, _ in tables["scratch"][0]}
-            scratch = " / ".join(str(converged[s, "uninitialised"])
-                                 if converged[s, "uninitialised"] <= n_trials else f"> {n_trials}"
-                                 for s in stars)
-            firsts = [" / ".join(f"{np.mean(curves[f'{robot}/{s}/{c}'], axis=0)[0]:.1f}"
+            converged = {(r, s, c): k for r, s, c, k, _ in result.tables["scratch"][0]}
+            scratch = " / ".join(trials_text(converged[robot, s, "uninitialised"], result.n_trials)
+                                 for s in result.stars)
+            firsts = [" / ".join(f"{np.mean(result.curves[f'{robot}/{s}/{c}'], axis=0)[0]:.1f}"
                                  for c in ("uninitialised", "random", "transfer-PA",
-                                           "transfer-LPA")) for s in stars]
-            saved = [" / ".join(f"{100 * tables[rule][1][robot][c]:.0f}"
-                                for rule in ("scratch", "plateau")) + " %"
-                     for c in CONDITIONS[1:]]
-            lines.append(f"| {setup} | {len(seeds)} | {scratch} | " + " | ".join(firsts + saved)
-                         + " |")
+                                           "transfer-LPA")) for s in result.stars]
+            saved = [" / ".join(f"{100 * result.tables[rule][1][robot][c]:.0f}" for rule in RULES)
+                     + " %" for c in CONDITIONS[1:]]
+            lines.append(f"| {setup} | {len(result.seeds)} | {scratch} | "
+                         + " | ".join(firsts + saved) + " |")
         lines.append("")
     return "\n".join(lines)
 
