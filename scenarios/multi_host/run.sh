@@ -31,8 +31,9 @@
 # machine's own namespace, so no packet of the run can leave the namespaces made here. DDS
 # discovers over that subnet (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET: multicast on the bridge,
 # routed there by a 224.0.0.0/4 route on each host's own interface), and uses UDP only
-# (FASTDDS_BUILTIN_TRANSPORTS=UDPv4: shared memory would join processes on one machine
-# behind the network's back). Everything is removed at the end, after Ctrl-C or a failure.
+# (FASTDDS_BUILTIN_TRANSPORTS=UDPv4, without tools/env.sh's loopback-only profile: shared
+# memory would join processes on one machine behind the network's back). Everything is
+# removed at the end, after Ctrl-C or a failure.
 set -uo pipefail
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
