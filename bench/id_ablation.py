@@ -44,6 +44,10 @@ from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 THESIS_LWPR = {"init_D": 30.0, "norm_in": 1.0}
+#: The ablation's base is the set-up of the 2026-12-04 references (config.yaml then): LWPR
+#: answers the nearest field's offset where none is active. config.yaml has since chosen the
+#: zero answer (factor 6), so every set-up states the answer it runs with.
+BASE_LWPR = {"empty_prediction": "nearest"}
 #: name -> the switches of issue 26's factors (absent: today's choice).
 SETUPS = {
     "today": {},
@@ -119,7 +123,7 @@ def run(setup, seed, n_trials, config_path=CONFIG):
     line = config["/babbling/*"]["ros__parameters"]["samples_per_segment"]
     robots = {star: {name: StarRobot(config, name, star, switches.get("actuator", "torque"))
                      .configure(config, name, star, switches.get("time_law"),
-                                switches.get("lwpr"))
+                                {**BASE_LWPR, **switches.get("lwpr", {})})
                      for name in names} for star in experiment["stars"]}
     dt = robots[experiment["stars"][0]][names[0]].dt
     pairs = {name: interpolated(rows, interpolation, line, dt)
