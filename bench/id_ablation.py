@@ -6,6 +6,7 @@ Usage, from the repository root::
 
     python -m bench.id_ablation run --setup S --seed N [--trials 15] [--out DIR]
     python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary]
+    python -m bench.id_ablation export --setup S --to RUN_DIR [--out DIR]
 
 ``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
 robots on both stars for the conditions of §5.5.3 (uninitialised, random, transfer-PA,
@@ -19,7 +20,9 @@ graph's ``start_noise`` is not used here). ``report`` joins the seeds of each se
 star, the first-trial error and the trials to convergence of every condition under both rules
 (within 10 % of scratch's final error; each curve by its own plateau), and per robot the
 training time saved as §5.5.3 counts it (both stars, 14.4 s of babbling charged to the
-initialised conditions), beside the thesis' figures.
+initialised conditions), beside the thesis' figures. ``export`` writes one set-up's seeds as
+a chapter 5 run directory (results.json, learning_curves.csv, Fig. 5-7/5-8, report.txt: the
+graph's outputs, but Fig. 5-6), which merge_results.py and paired_seeds.py read.
 
 The set-ups (``SETUPS``) are issue 26's factors: 1 the star legs' time law, 2 the actuator,
 3 LWPR's input scaling (init_D 30 on raw inputs), 4 spline correspondences, 5 the babbling
@@ -40,6 +43,7 @@ from bench.id_transfer_headroom import CONFIG, StarRobot, babble
 from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
                                                     convergence_table, paired_against)
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
+from lpa_transfer.inverse_dynamics.report import write_outputs
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
@@ -271,6 +275,22 @@ def summary(out, setups):
     return "\n".join(lines)
 
 
+def export(out, setup, to):
+    """Write ``setup``'s runs under ``out`` as a chapter 5 run directory ``to`` (report.write_
+    outputs: no traces, no start noise); returns the report's text."""
+    result = analysed(out, setup, ["youbot", "pincher"])
+    if result is None:
+        raise SystemExit(f"error: no runs of {setup} under {out}")
+    experiment = SimpleNamespace(robots=result.robots, stars=result.stars,
+                                 n_trials=result.n_trials, tolerance=TOLERANCE,
+                                 babbling_seconds=BABBLING_SECONDS, start_noise=0.0,
+                                 done_seeds=result.seeds)
+    curves = {key: runs.tolist() for key, runs in result.metres.items()}
+    return write_outputs(curves, {}, experiment, Path(to),
+                         where=f"in process (bench/id_ablation.py, set-up {setup}: "
+                               f"{json.dumps(SETUPS[setup])}; equal to the graph at start_noise 0)")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -284,7 +304,14 @@ def main(argv=None):
     many.add_argument("--setups", nargs="+", default=list(SETUPS))
     many.add_argument("--summary", action="store_true",
                       help="one table per robot across the set-ups instead of one per set-up")
+    to = sub.add_parser("export")
+    to.add_argument("--setup", choices=sorted(SETUPS), required=True)
+    to.add_argument("--to", type=Path, required=True)
+    to.add_argument("--out", type=Path, default=Path("runs/id_ablation"))
     args = parser.parse_args(argv)
+    if args.command == "export":
+        print(export(args.out, args.setup, args.to), end="")
+        return 0
     if args.command == "report":
         print((summary if args.summary else report)(args.out, args.setups))
         return 0

@@ -319,35 +319,52 @@ def run_action(executor, client, goal, timeout, stop=None, on_feedback=None):
     returns the Result. ``on_feedback(feedback)`` sees each Feedback. After ``timeout`` s, or
     once ``stop`` (SIGINT/SIGTERM) is set, the goal is cancelled and ServiceTimeout raised;
     RuntimeError if the server rejects the goal."""
-    name = client._action_name
+    return run_actions(executor, [(client, goal, on_feedback)], timeout, stop)[0]
+
+
+def run_actions(executor, goals, timeout, stop=None):
+    """:func:`run_action` for several goals at once, each ``(client, goal, on_feedback)`` on
+    its own action server: all are sent, then ``executor`` spins until every result is in
+    (the servers work in parallel); the Results in that order. On a timeout, a stop or a
+    rejected goal every goal still running is cancelled before the error is raised."""
     deadline = time.monotonic() + timeout
 
-    def wait(future):
-        while not future.done():
+    def wait(futures):
+        while not all(future.done() for future in futures):
             stopped = stop is not None and stop.is_set()
             if stopped or time.monotonic() > deadline:
                 return "stopped" if stopped else "timeout"
             executor.spin_once(timeout_sec=0.05)
         return None
 
-    sent = client.send_goal_async(
-        goal, feedback_callback=None if on_feedback is None
-        else lambda message: on_feedback(message.feedback))
-    if (why := wait(sent)) is not None:
-        raise ServiceTimeout(f"{why} while action {name} took the goal")
-    handle = sent.result()
-    if not handle.accepted:
-        raise RuntimeError(f"action {name} rejected the goal (it runs one goal at a time)")
-    answer = handle.get_result_async()
-    if (why := wait(answer)) is not None:
-        cancel, until = handle.cancel_goal_async(), time.monotonic() + 5.0
-        while not cancel.done() and time.monotonic() < until:
+    def cancel(handles):
+        cancels = [handle.cancel_goal_async() for handle in handles]
+        until = time.monotonic() + 5.0
+        while not all(c.done() for c in cancels) and time.monotonic() < until:
             executor.spin_once(timeout_sec=0.05)
-        raise ServiceTimeout(f"stopped while waiting for action {name} (goal cancelled)"
-                             if why == "stopped" else
-                             f"action {name} did not finish within {timeout:g} s (goal "
-                             "cancelled)")
-    return answer.result().result
+
+    names = [client._action_name for client, _, _ in goals]
+    sent = [client.send_goal_async(
+        goal, feedback_callback=None if on_feedback is None
+        else lambda message, f=on_feedback: f(message.feedback))
+        for client, goal, on_feedback in goals]
+    if (why := wait(sent)) is not None:
+        cancel([f.result() for f in sent if f.done() and f.result().accepted])
+        raise ServiceTimeout(f"{why} while action(s) {', '.join(names)} took the goal")
+    handles = [future.result() for future in sent]
+    refused = [name for name, handle in zip(names, handles) if not handle.accepted]
+    if refused:
+        cancel([handle for handle in handles if handle.accepted])
+        raise RuntimeError(f"action {refused[0]} rejected the goal (it runs one goal at a time)")
+    answers = [handle.get_result_async() for handle in handles]
+    if (why := wait(answers)) is not None:
+        cancel([h for h, a in zip(handles, answers) if not a.done()])
+        late = [n for n, a in zip(names, answers) if not a.done()]
+        raise ServiceTimeout(f"stopped while waiting for action {', '.join(late)} (goal "
+                             "cancelled)" if why == "stopped" else
+                             f"action {', '.join(late)} did not finish within {timeout:g} s "
+                             "(goal cancelled)")
+    return [answer.result().result for answer in answers]
 
 
 def init_with_stop_event(args=None):
@@ -630,11 +647,19 @@ class ServiceCalls:
     def run(self, action_type, name, on_feedback=None, **fields):
         """Run the goal ``fields`` on the action ``name`` (:func:`run_action`); its Result,
         RuntimeError when it says ``success = false``."""
-        result = run_action(self.executor, self.action_client(action_type, name),
-                            action_type.Goal(**fields), self.timeout, self.stop, on_feedback)
-        if not result.success:
-            raise RuntimeError(f"{name} failed: {result.message}")
-        return result
+        return self.run_many(action_type, [(name, on_feedback, fields)])[0]
+
+    def run_many(self, action_type, goals):
+        """Run goals ``(name, on_feedback, fields)`` on different servers of ``action_type``
+        at once (:func:`run_actions`); their Results, RuntimeError when one says
+        ``success = false``."""
+        results = run_actions(self.executor, [
+            (self.action_client(action_type, name), action_type.Goal(**fields), on_feedback)
+            for name, on_feedback, fields in goals], self.timeout, self.stop)
+        for (name, _, _), result in zip(goals, results):
+            if not result.success:
+                raise RuntimeError(f"{name} failed: {result.message}")
+        return results
 
 
 def matrix_from_rows(rows, cols, data, name):

@@ -47,7 +47,9 @@ def paired_lines(curves, robots, stars, early_trials=5, reference="random"):
     return lines
 
 
-def write_outputs(curves, traces, experiment, out):
+def write_outputs(curves, traces, experiment, out, where="over the node graph"):
+    """Write results.json, learning_curves.csv, the figures (Fig. 5-6 only with ``traces``)
+    and report.txt into ``out``; ``where`` names what computed the curves in the report."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps({
         "settings": {key: getattr(experiment, key) for key in SETTINGS},
@@ -62,7 +64,8 @@ def write_outputs(curves, traces, experiment, out):
                 writer.writerows([robot, star, condition, seed, trial + 1, repr(error)]
                                  for trial, error in enumerate(errors))
     plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
-    plot_traces(traces, experiment, out / "fig5_6_traces.png")
+    if traces:
+        plot_traces(traces, experiment, out / "fig5_6_traces.png")
     args = (curves, experiment.robots, experiment.stars, experiment.tolerance,
             experiment.babbling_seconds)
     rows, savings = convergence_table(*args)
@@ -71,7 +74,7 @@ def write_outputs(curves, traces, experiment, out):
     intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
     other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
                                   experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
-    lines = [f"Thesis §5.5.3 over the node graph: {len(experiment.done_seeds)} seed(s) "
+    lines = [f"Thesis §5.5.3 {where}: {len(experiment.done_seeds)} seed(s) "
              f"({', '.join(map(str, experiment.done_seeds))}), "
              f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
              f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "

@@ -125,38 +125,47 @@ class Experiment(Node):
                                      stop=stop)
         self.client, self.call = self.calls.client, self.calls.call
         self.traces = {}
+        self.recording = {}            # robot -> its trial results while one of it runs
         for robot in self.robots:
-            self.create_subscription(TrialResult, f"/{robot}/trial_result", self.on_trial, 50)
-        self.recording = None
+            self.create_subscription(TrialResult, f"/{robot}/trial_result",
+                                     lambda msg, robot=robot: self.on_trial(robot, msg), 50)
         self.done_seeds = []
-        self.current = ""
 
-    def on_trial(self, msg):
-        if self.recording is not None:
-            self.recording.append(msg)
+    def on_trial(self, robot, msg):
+        if robot in self.recording:
+            self.recording[robot].append(msg)
 
-    def on_feedback(self, feedback):
-        """Progress: the run_trials action's feedback after every trial."""
-        print(f"  {self.current}: trial {feedback.trial}/{feedback.n_trials} tracking error "
-              f"{1e3 * feedback.tracking_error:.2f} mm", flush=True)
+    @staticmethod
+    def progress(label):
+        """Progress of the run ``label``: the run_trials action's feedback after every trial."""
+        def show(feedback):
+            print(f"  {label}: trial {feedback.trial}/{feedback.n_trials} tracking error "
+                  f"{1e3 * feedback.tracking_error:.2f} mm", flush=True)
+        return show
 
-    # -- one learner run --------------------------------------------------------------------
-    def learn(self, robot, star, initial_data, start_offset=()):
-        """Reset the learner, initialise it, run the trials from the centre pose plus
-        ``start_offset``: (errors, experience, messages)."""
-        learner = f"/{robot}/{star}"
-        self.call(InitialiseLearner, f"{learner}/initialise", samples=to_matrix(initial_data),
-                  reset=True)
-        self.recording = []
-        answer = self.calls.run(RunTrials, f"{learner}/run_trials", self.on_feedback,
-                                n_trials=self.n_trials,
-                                start_offset=[float(v) for v in start_offset])
+    # -- learner runs -----------------------------------------------------------------------
+    def learn(self, runs):
+        """Learner runs ``(robot, star, initial_data, start_offset, label)`` of different
+        robots at once (each robot has its own simulator, so they run in parallel): reset and
+        initialise each learner, run its trials from the centre pose plus ``start_offset``;
+        one (errors, experience, messages) per run."""
+        robots = [robot for robot, *_ in runs]
+        assert len(set(robots)) == len(robots), "one run per robot at a time"
+        for robot, star, initial_data, _, _ in runs:
+            self.call(InitialiseLearner, f"/{robot}/{star}/initialise",
+                      samples=to_matrix(initial_data), reset=True)
+        self.recording = {robot: [] for robot in robots}
+        answers = self.calls.run_many(RunTrials, [
+            (f"/{robot}/{star}/run_trials", self.progress(label),
+             dict(n_trials=self.n_trials, start_offset=[float(v) for v in offset]))
+            for robot, star, _, offset, label in runs])
         deadline = time.monotonic() + 5
-        while len(self.recording) < self.n_trials and time.monotonic() < deadline:
+        while (any(len(m) < self.n_trials for m in self.recording.values())
+               and time.monotonic() < deadline):
             self.spinner.spin_once(timeout_sec=0.05)
-        messages, self.recording = self.recording, None
-        return (list(answer.tracking_errors), from_matrix(answer.experience, "experience"),
-                messages)
+        recorded, self.recording = self.recording, {}
+        return [(list(answer.tracking_errors), from_matrix(answer.experience, "experience"),
+                 recorded[robot]) for answer, robot in zip(answers, robots)]
 
     def transfer(self, model_id, points):
         return self.mapping.transfer(model_id, points)
@@ -191,8 +200,8 @@ class Experiment(Node):
         for index, seed in enumerate(self.seeds):
             offsets = {task: self.start_offset(seed, *task) for task in tasks}
             if self.start_noise > 0 or index == 0:   # else deterministic: the same every seed
-                for task in tasks:
-                    scratch[task] = self.from_scratch(seed, *task, offsets[task])
+                for star in self.stars:                     # the robots side by side
+                    scratch.update(self.from_scratch(seed, star, offsets))
             files = pair_files[index * per_seed:(index + 1) * per_seed]
             if self.interpolation != "none":
                 self.check_whole_lines(files)
@@ -204,10 +213,11 @@ class Experiment(Node):
             methods = [m for m in ("pa", "lpa") if any(c.endswith(f"transfer-{m.upper()}")
                                                          for c in run)]
             self.fit_models(seed, pairs, methods)
+            data = {}
             for target in self.targets:
                 source = next(r for r in self.robots if r != target)
                 for star in self.stars:
-                    data = {"random": pairs[target]}
+                    data[target, star] = {"random": pairs[target]}
                     for method in ("PA", "LPA"):
                         if not {f"transfer-{method}", f"own+transfer-{method}"} & set(run):
                             continue
@@ -217,17 +227,19 @@ class Experiment(Node):
                             interpolated(experience, self.interpolation,
                                          len(experience) // self.n_source_trials,
                                          self.control_period))
-                        data[f"transfer-{method}"] = transferred
-                        data[f"own+transfer-{method}"] = np.vstack(   # own babbling last
-                            (transferred, pairs[target]))
-                    for condition in run[1:]:
-                        initial = data[condition]
-                        self.current = f"seed {seed} {target} {star} {condition}"
-                        errors, _, _ = self.learn(target, star, initial,
-                                                  offsets[target, star])
+                        data[target, star][f"transfer-{method}"] = transferred
+                        data[target, star][f"own+transfer-{method}"] = np.vstack(
+                            (transferred, pairs[target]))                  # own babbling last
+            # every learner meets its conditions in the same order as alone; the targets'
+            # runs of a star and condition go side by side
+            for star in self.stars:
+                for condition in run[1:]:
+                    batch = [(target, star, data[target, star][condition],
+                              offsets[target, star], f"seed {seed} {target} {star} {condition}")
+                             for target in self.targets]
+                    for (target, *_, label), (errors, _, _) in zip(batch, self.learn(batch)):
                         curves[f"{target}/{star}/{condition}"].append(errors)
-                        self.get_logger().info(f"seed {seed} {target} {star} {condition}: "
-                                               f"{_mm(errors)}")
+                        self.get_logger().info(f"{label}: {_mm(errors)}")
             self.done_seeds.append(seed)
             for robot, star in tasks:
                 if robot in self.targets:
@@ -263,15 +275,19 @@ class Experiment(Node):
         rng = np.random.default_rng([seed, self.robots.index(robot), self.stars.index(star)])
         return rng.normal(0.0, self.start_noise, self.n_joints[robot])
 
-    def from_scratch(self, seed, robot, star, offset):
-        """Learning from scratch: (errors, its first ``n_source_trials`` trials' experience);
-        the traces of the first seed's run are kept for Fig. 5-6."""
-        empty = np.zeros((0, 4 * self.n_joints[robot]))
-        self.current = f"seed {seed} {robot} {star} from scratch"
-        errors, experience, messages = self.learn(robot, star, empty, offset)
-        self.traces.setdefault((robot, star), [_trace(messages[0]), _trace(messages[-1])])
-        self.get_logger().info(f"seed {seed} {robot} {star} from scratch: {_mm(errors)}")
-        return errors, experience[:self.n_source_trials * len(experience) // self.n_trials]
+    def from_scratch(self, seed, star, offsets):
+        """Every robot learning ``star`` from scratch, side by side: {(robot, star): (errors,
+        its first ``n_source_trials`` trials' experience)}; the traces of the first seed's
+        run are kept for Fig. 5-6."""
+        batch = [(robot, star, np.zeros((0, 4 * self.n_joints[robot])), offsets[robot, star],
+                  f"seed {seed} {robot} {star} from scratch") for robot in self.robots]
+        done = {}
+        for (robot, *_, label), (errors, experience, messages) in zip(batch, self.learn(batch)):
+            self.traces.setdefault((robot, star), [_trace(messages[0]), _trace(messages[-1])])
+            self.get_logger().info(f"{label}: {_mm(errors)}")
+            done[robot, star] = (errors, experience[:self.n_source_trials * len(experience)
+                                                     // self.n_trials])
+        return done
 
 
 def _mm(errors):
