@@ -116,6 +116,16 @@ def run(setup, seed, n_trials, config_path=CONFIG):
     the graph's experiment (run_experiment.py) computes them: the pairs of both stars fit one
     PA and one LPA model per direction, 'random' is the target's babbling of both stars, and
     each star's transferred data are the source's 15 trials of that star from scratch."""
+    return {f"{target}/{star}/{condition}": [1e3 * e for e in errors]
+            for target, star, condition, _, _, errors in runs(setup, seed, n_trials,
+                                                                config_path)}
+
+
+def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
+    """:func:`run`'s learner runs one by one: (target, star, condition, learner after its last
+    trial, the fields its initial data made, errors in m); per star (default: all; the
+    babbling and the models always use all), learning from scratch of every robot first (each
+    source's experience), then ``targets``' (default: all) initialised conditions."""
     switches = SETUPS[setup]
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
@@ -143,14 +153,14 @@ def run(setup, seed, n_trials, config_path=CONFIG):
                 cluster_dims=list(range(2 * n_source)), random_state=seed,
                 **fit
             ).fit(pairs[source], pairs[target])}
-    curves = {}
-    for star in experiment["stars"]:
+    for star in experiment["stars"] if stars is None else stars:
         experience = {}
         for name in names:          # learning from scratch: the uninitialised curve and the
             robot = robots[star][name]                                        # experience
-            errors, experience[name] = robot.trials(robot.learner(), n_trials)
-            curves[f"{name}/{star}/uninitialised"] = [1e3 * e for e in errors]
-        for target in names:
+            learner = robot.learner()
+            errors, experience[name] = robot.trials(learner, n_trials)
+            yield name, star, "uninitialised", learner, 0, errors
+        for target in names if targets is None else targets:
             source = next(name for name in names if name != target)
             robot = robots[star][target]
             source_experience = interpolated(experience[source], interpolation,
@@ -162,9 +172,16 @@ def run(setup, seed, n_trials, config_path=CONFIG):
                 initial[f"own+transfer-{method}"] = np.vstack((initial[f"transfer-{method}"],
                                                                pairs[target]))
             for condition, samples in initial.items():
-                errors = robot.trials(robot.learner(samples), n_trials)[0]
-                curves[f"{target}/{star}/{condition}"] = [1e3 * e for e in errors]
-    return curves
+                learner = robot.learner(samples)
+                made = n_fields(learner)
+                errors = robot.trials(learner, n_trials)[0]
+                yield target, star, condition, learner, made, errors
+
+
+def n_fields(learner):
+    """Receptive fields (all outputs) of a learner's LWPR; 0 before it has seen a sample."""
+    rfs = getattr(learner.regressor, "_rfs", None)
+    return 0 if rfs is None else rfs.n
 
 
 def load(out, setup):

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Where do the chapter 5 learners' receptive fields lie after learning? (issue 26's cap)
+
+Usage: ``python -m bench.id_fields [--setup S] [--seed N] [--trials 15] [--targets ...]
+[--stars ...]``, from the repository root.
+
+For one set-up of ``bench/id_ablation.py`` and one babbling seed, each target robot and star
+learns the star from scratch and from each initial data set of §5.5.3 (random, transfer-PA,
+transfer-LPA) for ``--trials`` trials, as id_ablation runs them. After the last trial it
+prints, per condition, the receptive fields of the learner's LWPR (all outputs), how many of
+them were made by the initial data, and along the star's desired states the mean number of
+fields per output activated above ``w_gen`` (the ones that keep new fields from being made
+there) and of those the share made by the initial data; beside them the last trial's error.
+The idea measured: LWPR places a new field only where no field answers above ``w_gen``, so
+fields made by initial data away from the task hold the task's samples with the shapes and
+centres those data gave them, where learning from scratch places its fields on the task.
+"""
+import argparse
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from bench import id_ablation
+from bench.id_transfer_headroom import CONFIG, StarRobot
+
+
+def fields_on_task(learner, n_initial_fields, desired):
+    """(fields, fields made by the initial data, mean fields per output above w_gen along
+    ``desired``, share of those made by the initial data)."""
+    lwpr = learner.regressor
+    rfs = lwpr._rfs
+    Xn = lwpr._check_queries(desired)
+    active, initial = [], []
+    for x in Xn[::10]:
+        rows, w = rfs.activations(x, lwpr.w_gen)
+        active.append(len(rows) / lwpr.n_outputs_)
+        initial.append(np.mean(rows < n_initial_fields) if len(rows) else 0.0)
+    return rfs.n, n_initial_fields, float(np.mean(active)), float(np.mean(initial))
+
+
+def desired_states(setup, target, star):
+    """The (q, q̇, q̈) rows of ``target``'s star under ``setup`` (its time law)."""
+    config = yaml.safe_load(Path(CONFIG).read_text())
+    robot = StarRobot(config, target, star).configure(
+        config, target, star, id_ablation.SETUPS[setup].get("time_law"))
+    return np.hstack(robot.trajectory[:3])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--setup", default="zero_answer", choices=sorted(id_ablation.SETUPS))
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--trials", type=int, default=15)
+    parser.add_argument("--targets", nargs="+", default=["pincher", "youbot"])
+    parser.add_argument("--stars", nargs="+", default=["star1"])
+    args = parser.parse_args(argv)
+    print(f"set-up {args.setup}, seed {args.seed}, {args.trials} trials")
+    print(f"{'target':<8} {'star':<6} {'condition':<14} {'fields':>6} {'initial':>7} "
+          f"{'active/output':>13} {'of initial':>10} {'trial 1':>8} {'last (mm)':>9}")
+    tasks = {(t, s): desired_states(args.setup, t, s) for t in args.targets for s in args.stars}
+    for target, star, condition, learner, made, errors in id_ablation.runs(
+            args.setup, args.seed, args.trials, targets=args.targets, stars=args.stars):
+        if target not in args.targets or star not in args.stars:
+            continue
+        n, n0, active, share = fields_on_task(learner, made, tasks[target, star])
+        print(f"{target:<8} {star:<6} {condition:<14} {n:>6} {n0:>7} {active:>13.2f} "
+              f"{share:>10.2f} {1e3 * errors[0]:>8.2f} {1e3 * errors[-1]:>9.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
