@@ -134,3 +134,31 @@ def test_a_cancelled_goal_stops_between_trials_and_the_next_is_served(learner):
     assert 1 <= len(outcome.result.tracking_errors) < 5, outcome.result.message
     after = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
     assert after.success, after.message + nodes[1].log()
+
+
+def test_run_actions_cancels_the_accepted_goals_when_one_is_refused(learner):
+    """run_actions (the chapter 5 experiment's robots side by side) sends all goals before it
+    waits: two goals to one learner, which runs one at a time, get one accepted and one
+    refused; it raises on the refusal and cancels the accepted goal, which stops between
+    trials (not after its 5), so the learner serves the next goal."""
+    import time
+
+    from lpa_transfer_nodes._ros_util import run_actions
+
+    client, run, _, results, nodes = learner
+    client.run(run, RunTrials.Goal(n_trials=0), timeout=60)     # server up, discovery done
+    with pytest.raises(RuntimeError, match="rejected the goal"):
+        run_actions(client.executor, [(run, RunTrials.Goal(n_trials=5), None),
+                                      (run, RunTrials.Goal(n_trials=5), None)], 120)
+    deadline = time.monotonic() + 60
+    while True:                 # the cancelled goal ends after the trial it is in
+        try:
+            after = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
+            break
+        except RuntimeError as error:
+            if "rejected" not in str(error) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+    assert after.success, after.message + nodes[1].log()
+    client.spin_until(lambda: len(results) >= 2, timeout=10, what="the trial results")
+    assert len(results) < 5 + 1, [r.trial for r in results]   # the first goal was cut short
