@@ -117,13 +117,14 @@ def run(setup, seed, n_trials, config_path=CONFIG):
     PA and one LPA model per direction, 'random' is the target's babbling of both stars, and
     each star's transferred data are the source's 15 trials of that star from scratch."""
     return {f"{target}/{star}/{condition}": [1e3 * e for e in errors]
-            for target, star, condition, _, _, errors in runs(setup, seed, n_trials,
-                                                                config_path)}
+            for target, star, condition, _, _, _, errors in runs(setup, seed, n_trials,
+                                                                   config_path)}
 
 
 def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
-    """:func:`run`'s learner runs one by one: (target, star, condition, learner after its last
-    trial, the fields its initial data made, errors in m); per star (default: all; the
+    """:func:`run`'s learner runs one by one: (target, star, condition, the target's StarRobot
+    of that star, the learner after its last trial, the fields its initial data made, errors
+    in m); per star (default: all; the
     babbling and the models always use all), learning from scratch of every robot first (each
     source's experience), then ``targets``' (default: all) initialised conditions."""
     switches = SETUPS[setup]
@@ -159,7 +160,7 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
             robot = robots[star][name]                                        # experience
             learner = robot.learner()
             errors, experience[name] = robot.trials(learner, n_trials)
-            yield name, star, "uninitialised", learner, 0, errors
+            yield name, star, "uninitialised", robot, learner, 0, errors
         for target in names if targets is None else targets:
             source = next(name for name in names if name != target)
             robot = robots[star][target]
@@ -175,7 +176,7 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
                 learner = robot.learner(samples)
                 made = n_fields(learner)
                 errors = robot.trials(learner, n_trials)[0]
-                yield target, star, condition, learner, made, errors
+                yield target, star, condition, robot, learner, made, errors
 
 
 def n_fields(learner):

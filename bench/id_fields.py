@@ -17,13 +17,9 @@ centres those data gave them, where learning from scratch places its fields on t
 """
 import argparse
 
-from pathlib import Path
-
 import numpy as np
-import yaml
 
 from bench import id_ablation
-from bench.id_transfer_headroom import CONFIG, StarRobot
 
 
 def fields_on_task(learner, n_initial_fields, desired):
@@ -34,18 +30,10 @@ def fields_on_task(learner, n_initial_fields, desired):
     Xn = lwpr._check_queries(desired)
     active, initial = [], []
     for x in Xn[::10]:
-        rows, w = rfs.activations(x, lwpr.w_gen)
+        rows, _ = rfs.activations(x, lwpr.w_gen)
         active.append(len(rows) / lwpr.n_outputs_)
         initial.append(np.mean(rows < n_initial_fields) if len(rows) else 0.0)
     return rfs.n, n_initial_fields, float(np.mean(active)), float(np.mean(initial))
-
-
-def desired_states(setup, target, star):
-    """The (q, q̇, q̈) rows of ``target``'s star under ``setup`` (its time law)."""
-    config = yaml.safe_load(Path(CONFIG).read_text())
-    robot = StarRobot(config, target, star).configure(
-        config, target, star, id_ablation.SETUPS[setup].get("time_law"))
-    return np.hstack(robot.trajectory[:3])
 
 
 def main(argv=None):
@@ -59,12 +47,12 @@ def main(argv=None):
     print(f"set-up {args.setup}, seed {args.seed}, {args.trials} trials")
     print(f"{'target':<8} {'star':<6} {'condition':<14} {'fields':>6} {'initial':>7} "
           f"{'active/output':>13} {'of initial':>10} {'trial 1':>8} {'last (mm)':>9}")
-    tasks = {(t, s): desired_states(args.setup, t, s) for t in args.targets for s in args.stars}
-    for target, star, condition, learner, made, errors in id_ablation.runs(
+    for target, star, condition, robot, learner, made, errors in id_ablation.runs(
             args.setup, args.seed, args.trials, targets=args.targets, stars=args.stars):
-        if target not in args.targets or star not in args.stars:
+        if target not in args.targets:     # a source learning from scratch for its experience
             continue
-        n, n0, active, share = fields_on_task(learner, made, tasks[target, star])
+        desired = np.hstack(robot.trajectory[:3])          # the star's (q, q̇, q̈) rows
+        n, n0, active, share = fields_on_task(learner, made, desired)
         print(f"{target:<8} {star:<6} {condition:<14} {n:>6} {n0:>7} {active:>13.2f} "
               f"{share:>10.2f} {1e3 * errors[0]:>8.2f} {1e3 * errors[-1]:>9.2f}")
     return 0
