@@ -5,7 +5,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.mixture import GaussianMixture
 
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
-from lpa_transfer.transfer import gmm, local_procrustes
+from lpa_transfer.transfer import _em_kernels, gmm, local_procrustes
 from lpa_transfer.transfer.init_em import cluster_errors, init_em
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 from two_link import correspondences, mapping_rmse_mm
@@ -127,6 +127,57 @@ def test_em_matches_scikit_learn_from_the_same_start():
     np.testing.assert_allclose(means[order], reference.means_[ref_order], atol=1e-4)
     np.testing.assert_allclose(covs[order], reference.covariances_[ref_order], atol=1e-4)
     np.testing.assert_allclose(log_likelihood, reference.score(X), atol=1e-4)
+
+
+@pytest.mark.parametrize("dim, n_components", [(2, 60), (4, 7)])
+def test_compiled_em_sums_equal_the_numpy_sums(dim, n_components):
+    """The compiled E-step (_em_kernels) and the numpy path give the same log-likelihood,
+    n_k and moment sums to rounding, on a mixture whose log-ratios span 0 to below -700
+    (so the exp-by-halves branch under -512 and the floor are both taken)."""
+    rng = np.random.default_rng(11)
+    X = rng.normal(size=(900, dim)) * np.linspace(1.0, 3.0, dim)
+    start = gmm.from_partition(X, rng.integers(0, n_components, len(X)), n_components, 1e-6)
+    weights, means, covariances = start[0], X[rng.choice(len(X), n_components)], \
+        start[2] * 0.02                                       # narrow: far entries abound
+    features = gmm.quadratic_features(X)
+    resp = gmm.Responsibilities(weights, means, gmm.precisions_cholesky(covariances),
+                                np.zeros(dim))
+    log_ratios = features @ resp.coefficients + resp.constant
+    log_ratios -= log_ratios.max(axis=1, keepdims=True)
+    assert (log_ratios < -700).any() and ((log_ratios < -512) & (log_ratios > -700)).any()
+    expected = gmm._em_sums_numpy(X, features, resp)
+    got = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
+                              resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR)
+    assert not got[3].any()
+    np.testing.assert_allclose(got[0], expected[0], rtol=1e-13)
+    np.testing.assert_allclose(got[1], expected[1], rtol=1e-11, atol=1e-290)
+    np.testing.assert_allclose(got[2], expected[2], rtol=1e-11, atol=1e-290)
+    compiled = gmm._em_iteration(X, features, weights, means,
+                                 gmm.precisions_cholesky(covariances), 1e-6)
+    plain = gmm._em_iteration(X, features, weights, means,
+                              gmm.precisions_cholesky(covariances), 1e-6, compiled=False)
+    for a, b in zip(compiled, plain):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_em_iteration_falls_back_to_numpy_for_overflowing_rows():
+    """A point whose expanded quadratic overflows is flagged by the kernel, and the iteration
+    is then the numpy path's (which gives such a point to its nearest component)."""
+    rng = np.random.default_rng(12)
+    X = np.vstack((rng.normal(size=(200, 2)), [[1e160, -1e160]]))
+    start = gmm.from_partition(X[:200], rng.integers(0, 3, 200), 3, 1e-6)
+    precisions = gmm.precisions_cholesky(start[2])
+    features = gmm.quadratic_features(X)
+    resp = gmm.Responsibilities(start[0], start[1], precisions, np.zeros(2))
+    with np.errstate(over="ignore", invalid="ignore"):
+        flagged = _em_kernels.em_sums(features, resp.coefficients, resp.constant,
+                                      gmm._LOG_FLOOR, gmm._EXP_FLOOR)[3]
+        got = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6)
+        plain = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6,
+                                  compiled=False)
+    assert flagged.tolist() == [False] * 200 + [True]
+    for a, b in zip(got, plain):
+        assert np.array_equal(a, b, equal_nan=True)       # the same path, overflow included
 
 
 @pytest.mark.parametrize("params, message", [

@@ -109,13 +109,14 @@ if ! up_to_date project "$proj_hash"; then
     did_something=1
 fi
 
-# 7. LWPR's compiled kernels (numba), compiled once here and cached on disk next to their
-# module, so that the first learner node does not stall compiling them. Redone when the
-# kernels or the requirements change.
-kernels=lpa_transfer/learners/_lwpr_kernels.py
-kernel_hash=$( (echo "$req_hash"; sha256sum "$kernels") | digest)
-if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1; then
-    say "compiling LWPR's kernels (numba, about 20 s)"
+# 7. The compiled kernels (numba) of LWPR and of LPA's EM, compiled once here and cached on
+# disk next to their modules, so that the first learner or mapping node does not stall
+# compiling them. Redone when the kernels or the requirements change.
+kernels=(lpa_transfer/learners/_lwpr_kernels.py lpa_transfer/transfer/_em_kernels.py)
+kernel_hash=$( (echo "$req_hash"; sha256sum "${kernels[@]}") | digest)
+if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1 \
+        || ! ls lpa_transfer/transfer/__pycache__/_em_kernels*.nbi >/dev/null 2>&1; then
+    say "compiling the LWPR and EM kernels (numba, about 25 s)"
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$VENV/bin/python" - <<'PY'
 import numpy as np
 from lpa_transfer.learners.lwpr import LWPR
@@ -127,6 +128,8 @@ for params in ({}, {"meta": True, "diag_only": False}):
     model.update(X[0], Y[0])
     model.predict(X)
     model.predict_with_confidence(X)
+from lpa_transfer import LocalProcrustesAnalysis
+LocalProcrustesAnalysis(n_min=7, c_min=1e-7).fit(rng.normal(size=(80, 2)), rng.normal(size=(80, 2)))
 PY
     mark_done kernels "$kernel_hash"
     did_something=1

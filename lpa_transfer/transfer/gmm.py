@@ -8,6 +8,7 @@ linear map). Parameters follow scikit-learn's ``GaussianMixture(covariance_type=
 """
 import numpy as np
 
+from lpa_transfer.transfer import _em_kernels
 from lpa_transfer.transfer.procrustes import grouped_moments
 
 _LOG_2PI = np.log(2.0 * np.pi)
@@ -184,23 +185,44 @@ def mean_log_likelihood(X, weights, means, covariances):
     return log_likelihoods(X, weights, means, precisions_cholesky(covariances)).mean()
 
 
-def _em_iteration(X, features, weights, means, precisions_chol, reg_covar):
-    """One E-step fused with the M-step's sums, block by block (full covariances).
+def _em_iteration(X, features, weights, means, precisions_chol, reg_covar, compiled=True):
+    """One E-step fused with the M-step's sums (full covariances).
 
     ``X`` is centred (the EM works relative to the data mean) and ``features`` holds its
     :func:`quadratic_features`. Returns the mean log-likelihood under the old parameters
-    and the new weights, means and covariances.
+    and the new weights, means and covariances. The sums run in compiled code
+    (:mod:`._em_kernels`) point by point; the numpy path (block by block, also taken when a
+    point is so far away that its quadratic overflows) computes the same to rounding.
     """
-    dim, n_components = X.shape[1], len(weights)
+    dim = X.shape[1]
+    responsibilities = Responsibilities(weights, means, precisions_chol, np.zeros(dim))
+    far = True
+    if compiled:
+        log_likelihood, n_k, sums, far = _em_kernels.em_sums(
+            np.ascontiguousarray(features), np.ascontiguousarray(responsibilities.coefficients),
+            responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR)
+    if np.any(far):
+        log_likelihood, n_k, sums = _em_sums_numpy(X, features, responsibilities)
+    return _m_step(log_likelihood, n_k, sums, len(X), dim, reg_covar)
+
+
+def _em_sums_numpy(X, features, responsibilities):
+    """Σ log p(x), n_k and Σ γ features of :func:`_em_iteration`, block by block in numpy."""
+    n_components = len(responsibilities.constant)
     sums = np.zeros((n_components, features.shape[1]))      # Σ γ x_i x_j (i ≤ j) and Σ γ x
     n_k = np.zeros(n_components)
     log_likelihood = 0.0
-    responsibilities = Responsibilities(weights, means, precisions_chol, np.zeros(dim))
     for rows, resp, log_norm in responsibilities.blocks(X, features):
         log_likelihood += log_norm.sum()
         n_k += resp.sum(axis=0)
         sums += resp.T @ features[rows]
-    n_k += 10 * np.finfo(float).eps
+    return log_likelihood, n_k, sums
+
+
+def _m_step(log_likelihood, n_k, sums, n_rows, dim, reg_covar):
+    """Weights, means and full covariances from the E-step's sums (the M-step of §3.4's EM)."""
+    n_components = len(n_k)
+    n_k = n_k + 10 * np.finfo(float).eps
     upper = np.triu_indices(dim)
     second = np.empty((n_components, dim, dim))
     second[:, upper[0], upper[1]] = sums[:, :len(upper[0])]
@@ -208,7 +230,7 @@ def _em_iteration(X, features, weights, means, precisions_chol, reg_covar):
     means = sums[:, len(upper[0]):] / n_k[:, None]
     covariances = second / n_k[:, None, None] - means[:, :, None] * means[:, None, :]
     covariances += reg_covar * np.eye(dim)
-    return log_likelihood / len(X), n_k / len(X), means, covariances
+    return log_likelihood / n_rows, n_k / n_rows, means, covariances
 
 
 def fit_em(X, weights, means, covariances, reg_covar=1e-6, max_iter=100, tol=1e-3):

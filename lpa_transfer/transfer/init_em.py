@@ -13,7 +13,6 @@ a few array operations however many clusters there are. Two choices the thesis l
 * when k_max would be exceeded, the clusters with the largest c_k are split first.
 """
 import numpy as np
-from scipy.sparse import csr_matrix
 
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 
@@ -55,8 +54,8 @@ def two_means(X, groups, n_groups, rng):
         second_half = assignment
         cells = keys + assignment
         sizes = np.bincount(cells, minlength=2 * n_groups)
-        sums = csr_matrix((np.ones(len(X)), (cells, np.arange(len(X)))),
-                          shape=(2 * n_groups, len(X))) @ X
+        sums = np.stack([np.bincount(cells, weights=column, minlength=2 * n_groups)
+                         for column in X.T], axis=1)          # row order, as a sparse product
         occupied = sizes > 0
         flat = centres.reshape(2 * n_groups, -1)
         flat[occupied] = sums[occupied] / sizes[occupied, None]

@@ -1,0 +1,87 @@
+"""Compiled E-step of the mixture's EM (thesis §3.4, eq. 3.8-3.9), fused with the M-step's sums.
+
+Why compiled: LPA's mixtures have hundreds of components in a low-dimensional clustering
+space (438 on the 2-link §3.6 pair at N = 5000), so a point's log-densities are a few
+multiply-adds each, and most of a point's responsibilities are negligible. In numpy every
+step (matrix product, peak, exp, normalisation, sums) is a pass over an (N, K) array, and
+the passes, not the arithmetic, dominated the fit. One point at a time in compiled code
+(numba, ``cache=True`` as the LWPR kernels) the same arithmetic stays in cache and the
+negligible entries are skipped.
+
+Same operations as gmm._em_iteration's numpy path, entry by entry: the log-density is the
+dot product of the point's quadratic features with the component's coefficients plus its
+constant; log-ratios to the row's peak are clamped at ``log_floor`` before exp; γ = e / Σe.
+The numpy path adds the clamped entries (e^-700 ≈ 1e-304 of the peak's 1) to the M-step
+sums too; here they are left out, which changes no sum by more than its last bit; and
+log-ratios below -512 take exp by halves (``_SLOW_EXP``). Sums run
+in another order than BLAS', so results agree to rounding (test_local_procrustes.py).
+No fast-math: it would reorder operations.
+"""
+import math
+
+import numpy as np
+from numba import njit
+
+#: Below this argument the C library's exp (glibc) leaves its fast path, about 4x slower per
+#: call (bench/README.md); there e^r is computed as (e^(r/2))², equal to an ulp or two. Such
+#: entries are below 1e-222 of their row's peak.
+_SLOW_EXP = -512.0
+
+
+@njit(cache=True)
+def em_sums(features, coefficients, constant, log_floor, exp_floor):
+    """Σ_i log p(x_i), n_k = Σ_i γ_ik and Σ_i γ_ik features_i, under the given mixture.
+
+    ``features`` (N, F) are the points' quadratic features, ``coefficients`` (F, K) and
+    ``constant`` (K,) the mixture's (gmm.Responsibilities). Rows whose log-densities are
+    not finite (points so far away that the expanded quadratic overflows) are not summed;
+    they are flagged in ``far`` (N,) for the caller.
+    """
+    n_rows, n_features = features.shape
+    n_components = constant.shape[0]
+    sums = np.zeros((n_components, n_features))
+    n_k = np.zeros(n_components)
+    far = np.zeros(n_rows, dtype=np.bool_)
+    log_density = np.empty(n_components)
+    live = np.empty(n_components, dtype=np.intp)
+    log_likelihood = 0.0
+    for i in range(n_rows):
+        for k in range(n_components):
+            log_density[k] = 0.0
+        for f in range(n_features):
+            value = features[i, f]
+            for k in range(n_components):
+                log_density[k] += value * coefficients[f, k]
+        peak = -np.inf
+        finite = True
+        for k in range(n_components):
+            log_density[k] += constant[k]
+            if not math.isfinite(log_density[k]):
+                finite = False
+            elif log_density[k] > peak:
+                peak = log_density[k]
+        if not finite:
+            far[i] = True
+            continue
+        n_live = 0                       # the entries above the floor, without branches
+        for k in range(n_components):
+            live[n_live] = k
+            n_live += log_density[k] - peak > log_floor
+        total = (n_components - n_live) * exp_floor
+        for j in range(n_live):
+            k = live[j]
+            ratio = log_density[k] - peak
+            if ratio > _SLOW_EXP:
+                log_density[k] = math.exp(ratio)
+            else:
+                half = math.exp(0.5 * ratio)
+                log_density[k] = half * half
+            total += log_density[k]
+        log_likelihood += peak + math.log(total)
+        for j in range(n_live):
+            k = live[j]
+            gamma = log_density[k] / total
+            n_k[k] += gamma
+            for f in range(n_features):
+                sums[k, f] += gamma * features[i, f]
+    return log_likelihood, n_k, sums, far
