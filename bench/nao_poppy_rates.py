@@ -19,7 +19,8 @@ scene) into nao_poppy.yaml. ``--accuracy`` prints instead what caps the transfer
 the transferred samples' error against Poppy's true kinematics (shares within 1 / 5 / 10 /
 15 mm), and the share of the reachable test points near (within the threshold of) a
 transferred sample, an accurate one (error within the threshold), and one of scratch's own
-samples after ``total`` s.
+samples after ``total`` s. ``--mixing`` prints how the k-NN inverse model mixes
+transferred and own samples at the end (:func:`mixing`).
 """
 import argparse
 import os
@@ -40,7 +41,8 @@ from lpa_transfer.exploration.guided import guided_exploration  # noqa: E402
 from lpa_transfer.robots.kinematics import hold_at_home  # noqa: E402
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis  # noqa: E402
 from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz  # noqa: E402
-from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points  # noqa: E402
+from lpa_transfer.goal_babbling.reaching import (evaluate_reaching, evaluation_points,  # noqa: E402
+                                                 reaching_errors)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model  # noqa: E402
 from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padded_rows,  # noqa: E402
@@ -159,18 +161,63 @@ def accuracy(rate, seed, total=5000.0, guided=600.0):
             "points near scratch's own samples at the end": near(own_points)}
 
 
+def mixing(rate, seed, total=5000.0, guided=600.0):
+    """How the K = 3 k-NN inverse model mixes transferred and own samples at ``total`` s
+    (plain LPA; issue 27): the reachable test points split by the origin of their query's
+    neighbours (all own / mixed / all transferred), with the reaching rate of each group,
+    the share of mixed neighbourhoods whose neighbours' non-shared joints (Poppy's torso,
+    held at home in every transferred sample) spread by more than 0.1 rad, and scratch's
+    rate on the same points."""
+    setup = prepare(rate, seed, total, guided)
+    target, points, threshold = setup.arms["target"], setup.points, setup.threshold
+    model = model_after_guided(setup, "LPA")
+    n_before = len(model.inverse.X_)                 # guided pairs + transferred samples
+    transferred = np.zeros(n_before, dtype=bool)
+    transferred[n_before - len(setup.commands):] = True
+    setup.babbler("target", 3).start(target, model).run_for(total - guided)
+    origin = np.zeros(len(model.inverse.X_), dtype=bool)
+    origin[:n_before] = transferred
+    _, neighbours = model.inverse.kneighbors(points)
+    n_transferred = origin[neighbours].sum(axis=1)
+    reached = reaching_errors(model.inverse, target, points) <= threshold
+    unshared = [j for j in range(len(setup.home)) if j not in setup.shared["target"]]
+    spread = np.ptp(model.inverse.Y_[neighbours][:, :, unshared], axis=1).max(axis=1)
+    scratch = setup.babbler("target", 1).start(target)
+    scratch.run_for(total)
+    scratch_reached = reaching_errors(scratch.model_.inverse, target, points) <= threshold
+    groups = {"all own": n_transferred == 0,
+              "mixed": (n_transferred > 0) & (n_transferred < neighbours.shape[1]),
+              "all transferred": n_transferred == neighbours.shape[1]}
+    figures = {"LPA rate": float(reached.mean()), "scratch rate": float(scratch_reached.mean()),
+               "transferred share of the samples": float(origin.mean()),
+               "transferred share of the neighbours": float(n_transferred.mean()
+                                                             / neighbours.shape[1])}
+    for name, members in groups.items():
+        figures[f"{name}: points / LPA rate / scratch rate"] = (
+            float(members.mean()), float(reached[members].mean()) if members.any() else np.nan,
+            float(scratch_reached[members].mean()) if members.any() else np.nan)
+    mixed = groups["mixed"]
+    wide = mixed & (spread > 0.1)
+    figures["mixed, torso spread > 0.1 rad: share of mixed / LPA rate / scratch rate"] = (
+        float(wide.sum() / max(mixed.sum(), 1)),
+        float(reached[wide].mean()) if wide.any() else np.nan,
+        float(scratch_reached[wide].mean()) if wide.any() else np.nan)
+    return figures
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 3.0, 4.0, 10.0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--override", nargs="*", default=[])
     parser.add_argument("--accuracy", action="store_true")
+    parser.add_argument("--mixing", action="store_true")
     args = parser.parse_args()
     CONFIG_FILES.extend(args.override)
-    if args.accuracy:
+    if args.accuracy or args.mixing:
         for rate in args.rates:
             for seed in args.seeds:
-                figures = accuracy(rate, seed)
+                figures = (accuracy if args.accuracy else mixing)(rate, seed)
                 print(f"{rate:g} movements a simulated second, seed {seed}: " + "; ".join(
                     f"{k} " + (" / ".join(f"{x:.3g}" for x in v) if isinstance(v, tuple)
                                else f"{v:.3g}" if isinstance(v, float) else str(v))
