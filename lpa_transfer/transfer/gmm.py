@@ -243,7 +243,7 @@ def fit_em(X, weights, means, covariances, reg_covar=1e-6, max_iter=100, tol=1e-
     offset = X.mean(axis=0)                  # centring keeps the moment form well conditioned
     X = X - offset
     means = means - offset
-    features = quadratic_features(X)
+    features = np.ascontiguousarray(quadratic_features(X))     # row-major once, for the kernel
     precisions_chol = precisions_cholesky(covariances)
     log_likelihood, converged, n_iter = -np.inf, False, 0
     for n_iter in range(1, max_iter + 1):
