@@ -170,8 +170,8 @@ def test_em_iteration_falls_back_to_numpy_for_overflowing_rows():
     features = gmm.quadratic_features(X)
     resp = gmm.Responsibilities(start[0], start[1], precisions, np.zeros(2))
     with np.errstate(over="ignore", invalid="ignore"):
-        flagged = _em_kernels.em_sums(features, resp.coefficients, resp.constant,
-                                      gmm._LOG_FLOOR, gmm._EXP_FLOOR)[3]
+        flagged = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
+                                      resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR)[3]
         got = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6)
         plain = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6,
                                   compiled=False)

@@ -55,25 +55,34 @@ _CHAINS = weakref.WeakKeyDictionary()
 
 
 def _chain(robot):
-    """(base, joint origins, Rodrigues' K and K² per joint axis, tool) of ``robot``."""
+    """(base, joint origins, Rodrigues' K and K² of every joint axis stacked (n, 3, 3), tool)
+    of ``robot``."""
     chain = _CHAINS.get(robot)
     if chain is None:
-        ks = [np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-              for x, y, z in robot.joint_axes]
+        ks = np.array([[[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]]
+                       for x, y, z in robot.joint_axes]).reshape(-1, 3, 3)
         chain = (_transform(robot.base_xyz, robot.base_rpy),
                  [_transform(xyz, rpy) for xyz, rpy in zip(robot.joint_xyz, robot.joint_rpy)],
-                 ks, [k @ k for k in ks], _transform(robot.tool_xyz, robot.tool_rpy))
+                 ks, ks @ ks, _transform(robot.tool_xyz, robot.tool_rpy))
         _CHAINS[robot] = chain
     return chain
 
 
-def _axis_rotations(k, kk, angles):
-    """Rot(axis, q) for each q (N, 4, 4): R = I + sin q K + (1 − cos q) K² (Rodrigues), with
-    K the axis' cross-product matrix and kk = K²."""
-    s, c = np.sin(angles)[:, None, None], np.cos(angles)[:, None, None]
-    rotations = np.empty((len(angles), 4, 4))
+#: Up to this many rows the joints' rotations are built in one pass (the per-call overhead
+#: dominates), beyond it joint by joint (memory traffic dominates); bench/README.md.
+_ALL_JOINTS_AT_ONCE = 256
+
+
+def _axis_rotations(ks, kks, q):
+    """Rot(axis_i, q_i) of every joint i for every row of ``q`` (N, n), as (n, N, 4, 4):
+    R = I + sin q K + (1 − cos q) K² (Rodrigues), K the axis' cross-product matrix and
+    kk = K². All joints in one pass: inverse kinematics calls the forward kinematics thousands
+    of times on a few rows, where the per-call overhead is what costs."""
+    angles = q.T[:, :, None, None]                                   # (n, N, 1, 1)
+    s, c = np.sin(angles), np.cos(angles)
+    rotations = np.empty((q.shape[1], len(q), 4, 4))
     rotations[:] = _EYE4
-    rotations[:, :3, :3] += s * k + (1 - c) * kk
+    rotations[:, :, :3, :3] += s * ks[:, None] + (1 - c) * kks[:, None]
     return rotations
 
 
@@ -85,10 +94,15 @@ def _frames(robot, q, every):
         raise ValueError(f"q must have shape (N, {robot.n_joints}) (one row of joint angles per "
                          f"sample), got shape {q.shape}")
     base, origins, ks, kks, tool = _chain(robot)
+    if len(q) <= _ALL_JOINTS_AT_ONCE:
+        rotations = _axis_rotations(ks, kks, q)
+    else:       # joint by joint: the temporaries stay in cache (same values, bit for bit)
+        rotations = (_axis_rotations(ks[i:i + 1], kks[i:i + 1], q[:, i:i + 1])[0]
+                     for i in range(len(origins)))
     frame = np.broadcast_to(base, (len(q), 4, 4))
     frames = []
-    for i, origin in enumerate(origins):
-        frame = frame @ origin @ _axis_rotations(ks[i], kks[i], q[:, i])
+    for origin, rotation in zip(origins, rotations):
+        frame = frame @ origin @ rotation
         if every:
             frames.append(frame)
     frames.append(frame @ tool)
