@@ -214,6 +214,18 @@ def test_chain_frames_are_the_partial_products_of_the_chain():
     np.testing.assert_allclose(lengths, np.broadcast_to(lengths[0], lengths.shape), atol=1e-12)
 
 
+@pytest.mark.parametrize("rows", [255, 256, 257])   # both sides of the one-pass threshold
+def test_each_rows_frames_do_not_depend_on_its_batch(rows):
+    """Bit for bit: inverse_kinematics.solve_many evaluates a row's step halvings together
+    with other rows' and must see what a call on that row alone gives."""
+    arm = robot("youbot_arm")
+    q = random_poses(arm, rows, seed=5)
+    batch = chain_frames(arm, q)
+    for i in (0, rows // 2, rows - 1):
+        assert np.array_equal(batch[i], chain_frames(arm, q[i:i + 1])[0])
+    assert np.array_equal(forward_kinematics(arm, q[::-1])[::-1], batch[:, -1, :3, 3])
+
+
 def test_forward_kinematics_rejects_bad_joint_arrays():
     arm = robot("pincher_arm")
     with pytest.raises(ValueError, match=r"shape \(N, 4\)"):
