@@ -19,9 +19,11 @@ MAX_HALVINGS = 30   # step halvings before an iteration counts as not shrinking 
 MAX_NUDGES = 3      # restarts off a stalled pose (see _nudge)
 NUDGE = 0.05
 #: solve_many tries a row's halvings k = 0, 1-2, 3-6, 7-14, 15-30 in five forward calls
-#: instead of one call per halving: few rows stall, and a call costs more than a row.
-_HALVING_BATCHES = [np.arange(first, min(2 * first + 1, MAX_HALVINGS + 1), dtype=np.float64)
-                    for first in (0, 1, 3, 7, 15)]
+#: instead of one call per halving (few rows stall, and a call costs more than a row): the
+#: step scales 2^-k of each call, shaped (k, 1, 1) to broadcast over (rows, n).
+_HALVING_SCALES = [0.5 ** np.arange(first, min(2 * first + 1, MAX_HALVINGS + 1),
+                                    dtype=np.float64)[:, None, None]
+                   for first in (0, 1, 3, 7, 15)]
 
 
 def jacobian(forward, q):
@@ -131,12 +133,11 @@ def solve_many(forward, x_targets, q_starts, joint_limits, damping=0.01, toleran
         norm = np.linalg.norm(ea, axis=1)
         q_next, e_next = qa.copy(), ea.copy()
         pending = np.arange(len(qa))
-        for halvings in _HALVING_BATCHES:   # a full step can overshoot far from the target
+        for scales in _HALVING_SCALES:   # a full step can overshoot far from the target
             # the next few halvings of every pending row in one call: step · 2^-k is exact, so
             # each row sees solve's trials and takes the first that helps
-            scales = 0.5 ** halvings[:, None, None]
             trial = np.clip(qa[pending] + step[pending] * scales, limits[:, 0], limits[:, 1])
-            e_trial = xa[pending] - forward(trial.reshape(-1, n)).reshape(len(halvings),
+            e_trial = xa[pending] - forward(trial.reshape(-1, n)).reshape(len(scales),
                                                                          len(pending), -1)
             better = np.linalg.norm(e_trial, axis=2) < norm[pending] * (1 - 1e-9)
             found = better.any(axis=0)

@@ -74,10 +74,11 @@ _ALL_JOINTS_AT_ONCE = 256
 
 
 def _axis_rotations(ks, kks, q):
-    """Rot(axis_i, q_i) of every joint i for every row of ``q`` (N, n), as (n, N, 4, 4):
-    R = I + sin q K + (1 − cos q) K² (Rodrigues), K the axis' cross-product matrix and
-    kk = K². All joints in one pass: inverse kinematics calls the forward kinematics thousands
-    of times on a few rows, where the per-call overhead is what costs."""
+    """Rot(axis_i, q_i) of the joints i given by ``ks`` (n, 3, 3), the axes' cross-product
+    matrices, and ``kks`` = K², for every row of ``q`` (N, n), as (n, N, 4, 4):
+    R = I + sin q K + (1 − cos q) K² (Rodrigues). All joints in one pass: inverse kinematics
+    calls the forward kinematics thousands of times on a few rows, where the per-call
+    overhead is what costs."""
     angles = q.T[:, :, None, None]                                   # (n, N, 1, 1)
     s, c = np.sin(angles), np.cos(angles)
     rotations = np.empty((q.shape[1], len(q), 4, 4))
