@@ -8,7 +8,8 @@ import yaml
 from conftest import ROOT
 from lpa_transfer.robots.inverse_kinematics import solve_many
 from lpa_transfer.robots.kinematics import arm_kinematics
-from lpa_transfer.lfd.experiment import collect_pairs, demonstrations, executed_errors, load_setup
+from lpa_transfer.lfd.experiment import (RememberedPairs, collect_pairs, demonstrations,
+                                         executed_errors, load_setup)
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "config.yaml").read_text())[
     "/**"]["ros__parameters"]
@@ -64,6 +65,15 @@ def test_collect_pairs_is_seeded_and_gives_the_number_asked(setup):
     assert not np.allclose(robot, other[1])
     np.testing.assert_allclose(learner.task_frame.to_demonstrator(robot[:, 4:]), demo[:, 4:],
                                atol=1e-12)
+    remembered = RememberedPairs()   # collects once per (learner, demonstrator, n, seed)
+    first = remembered(learner, setup.demonstrator, 120, seed=2)
+    np.testing.assert_array_equal(first[1], robot)
+    assert remembered(learner, setup.demonstrator, 120, seed=2) is first
+    np.testing.assert_array_equal(remembered(learner, setup.demonstrator, 120, seed=3)[1],
+                                  other[1])
+    meka = setup.learners["meka_right_arm"]
+    assert remembered(meka, setup.demonstrator, 120, seed=2)[1].shape == (120, 7)
+    assert not np.allclose(remembered(meka, setup.demonstrator, 120, seed=2)[1], robot)
 
 
 def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):

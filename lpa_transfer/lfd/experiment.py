@@ -131,6 +131,25 @@ def collect_pairs(learner, demonstrator, n_pairs, seed, batch=None):
                      f"babbled robot poses, fewer than the {n_pairs} pairs asked for")
 
 
+class RememberedPairs:
+    """:func:`collect_pairs` that keeps its answers: asked again for the same learner and
+    demonstrator objects, ``n_pairs`` and ``seed``, it returns the pairs it collected instead
+    of babbling and solving the IK again. Fig. 4-10's sweep and Table 4.3 both pair the human
+    with each robot on a seed's babbling, the same pairs when the sizes agree. Keys are the
+    objects' identities, which it keeps alive (so no later object can take a stored id); the
+    returned arrays are shared between callers, which only read them."""
+
+    def __init__(self):
+        self._kept = {}
+
+    def __call__(self, learner, demonstrator, n_pairs, seed):
+        key = (id(learner), id(demonstrator), n_pairs, seed)
+        if key not in self._kept:
+            self._kept[key] = (learner, demonstrator,
+                               collect_pairs(learner, demonstrator, n_pairs, seed))
+        return self._kept[key][2]
+
+
 def executed_errors(learner, mapped_rows, x_demonstrator):
     """Per-point task-space errors (m) of mapped robot rows (q̂_R, x̂_R) (T, n + 3): the
     mapped joints executed (forward kinematics, other joints at home) against where the

@@ -113,7 +113,7 @@ def between(teacher, learner):
 
 
 def multi_robot_transfer(demonstrator, teacher, learner, demos, n_pairs, n_min, seed,
-                         c_min=1e-7, dmp=None):
+                         c_min=1e-7, dmp=None, pairs=collect_pairs):
     """Table 4.3 for one seed: {condition: :class:`TransferErrors`} for ``CONDITIONS``.
 
     Every mapping is an LPA (``n_min``, ``c_min``) on ``n_pairs`` correspondences collected
@@ -121,12 +121,13 @@ def multi_robot_transfer(demonstrator, teacher, learner, demos, n_pairs, n_min, 
     ``seed``): human -> learner, human -> teacher, teacher -> learner (the teacher's IK
     started from the learner's poses carried over by the composed joint map). The errors
     are measured on the learner against where its own task frame puts the demonstrated
-    points, for every condition.
+    points, for every condition. ``pairs`` collects them (``collect_pairs``' signature; a
+    :class:`~lpa_transfer.lfd.experiment.RememberedPairs` reuses the sweep's).
     """
     relay = between(teacher, learner)
 
     def fit(target, source_body):
-        source_rows, target_rows, _ = collect_pairs(target, source_body, n_pairs, seed)
+        source_rows, target_rows, _ = pairs(target, source_body, n_pairs, seed)
         return LocalProcrustesAnalysis(n_min=n_min, c_min=c_min).fit(source_rows, target_rows)
 
     rows = np.vstack([d.rows for d in demos])
@@ -147,13 +148,14 @@ class SweepErrors(NamedTuple):
 
 
 def accuracy_sweep(learner, demonstrator, demos, sizes, n_mins, seeds, c_min=1e-7, dmp=None,
-                   random_state=0):
+                   random_state=0, pairs=collect_pairs):
     """Fig. 4-10 and 4-12: mapping and encoding errors (:class:`SweepErrors`) of LPA
     (``c_min``, each of ``n_mins``, the mixture in the demonstrator's (q, x) space, latent_dim
     the full 7-D, §4.4.3) for each training size and seed.
 
-    Per seed the correspondences are collected once (:func:`collect_pairs`, max(sizes)
-    pairs) and each size uses its first pairs, so a curve shows more data, not other data.
+    Per seed the correspondences are collected once (max(sizes) pairs, by ``pairs``,
+    :func:`collect_pairs`' signature) and each size uses its first pairs, so a curve shows
+    more data, not other data.
     """
     for size in sizes:
         check.check_int(size, "training size", minimum=1)
@@ -161,7 +163,7 @@ def accuracy_sweep(learner, demonstrator, demos, sizes, n_mins, seeds, c_min=1e-
     shape = (len(seeds), len(n_mins), len(sizes))
     out = SweepErrors(np.empty(shape), np.empty(shape))
     for i, seed in enumerate(seeds):
-        demo_pairs, robot_pairs, _ = collect_pairs(learner, demonstrator, max(sizes), seed)
+        demo_pairs, robot_pairs, _ = pairs(learner, demonstrator, max(sizes), seed)
         for j, n_min in enumerate(n_mins):
             for k, size in enumerate(sizes):
                 lpa = LocalProcrustesAnalysis(n_min=n_min, c_min=c_min,

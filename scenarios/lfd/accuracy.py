@@ -26,7 +26,7 @@ import yaml  # noqa: E402
 from lpa_transfer.lfd.accuracy import (accuracy_report, plot_accuracy, read_csvs,  # noqa: E402
                                        write_csvs)
 from lpa_transfer.lfd.dmp import JointDMP  # noqa: E402
-from lpa_transfer.lfd.experiment import demonstrations, load_setup  # noqa: E402
+from lpa_transfer.lfd.experiment import RememberedPairs, demonstrations, load_setup  # noqa: E402
 from lpa_transfer.lfd.skills import (accuracy_sweep, ik_method_errors,  # noqa: E402
                                      multi_robot_transfer)
 
@@ -53,11 +53,13 @@ def run(params):
                            n_samples=params["n_samples"])
     dmp = JointDMP(n_weights_per_dim=params["dmp_weights_per_joint"])
     sweeps, ik_method = {}, {}
+    pairs = RememberedPairs()   # Table 4.3's human -> robot pairs are the sweep's
     for name, learner in setup.learners.items():
         started = time.perf_counter()
         sweeps[name] = accuracy_sweep(learner, setup.demonstrator, demos,
                                       params["training_sizes"], params["n_mins"],
-                                      params["seeds"], c_min=params["c_min"], dmp=dmp)
+                                      params["seeds"], c_min=params["c_min"], dmp=dmp,
+                                      pairs=pairs)
         ik_method[name] = ik_method_errors(learner, demos, dmp)
         log(f"{name}: sweep {time.perf_counter() - started:.0f} s")
     teacher, learner = (setup.learners[params[k]] for k in ("teacher", "learner"))
@@ -67,7 +69,7 @@ def run(params):
         table.append(multi_robot_transfer(setup.demonstrator, teacher, learner, demos,
                                           params["multi_robot_pairs"],
                                           params["multi_robot_n_min"], seed,
-                                          c_min=params["c_min"], dmp=dmp))
+                                          c_min=params["c_min"], dmp=dmp, pairs=pairs))
         log(f"multi-robot seed {seed}: {time.perf_counter() - started:.0f} s")
     return demos, sweeps, ik_method, table
 
