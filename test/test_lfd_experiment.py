@@ -56,24 +56,22 @@ def test_demonstrations_are_traced_by_the_human_inside_the_box(setup, demos):
 
 
 def test_collect_pairs_is_seeded_and_gives_the_number_asked(setup):
+    """The same seed gives the same pairs; RememberedPairs hands back what it collected for
+    the same learner, demonstrator, size and seed, and collects anew for another."""
     learner = setup.learners["pr2_right_arm"]        # keeps about a quarter of its poses
-    demo, robot, tried = collect_pairs(learner, setup.demonstrator, 120, seed=2)
+    remembered = RememberedPairs()
+    demo, robot, tried = remembered(learner, setup.demonstrator, 120, seed=2)
     assert demo.shape == robot.shape == (120, 7) and tried >= 240
     again = collect_pairs(learner, setup.demonstrator, 120, seed=2)
     np.testing.assert_array_equal(robot, again[1])
+    np.testing.assert_array_equal(demo, again[0])
+    assert remembered(learner, setup.demonstrator, 120, seed=2)[1] is robot
     other = collect_pairs(learner, setup.demonstrator, 120, seed=3)
     assert not np.allclose(robot, other[1])
     np.testing.assert_allclose(learner.task_frame.to_demonstrator(robot[:, 4:]), demo[:, 4:],
                                atol=1e-12)
-    remembered = RememberedPairs()   # collects once per (learner, demonstrator, n, seed)
-    first = remembered(learner, setup.demonstrator, 120, seed=2)
-    np.testing.assert_array_equal(first[1], robot)
-    assert remembered(learner, setup.demonstrator, 120, seed=2) is first
-    np.testing.assert_array_equal(remembered(learner, setup.demonstrator, 120, seed=3)[1],
-                                  other[1])
-    meka = setup.learners["meka_right_arm"]
-    assert remembered(meka, setup.demonstrator, 120, seed=2)[1].shape == (120, 7)
-    assert not np.allclose(remembered(meka, setup.demonstrator, 120, seed=2)[1], robot)
+    meka = remembered(setup.learners["meka_right_arm"], setup.demonstrator, 120, seed=2)
+    assert meka[1].shape == (120, 7) and not np.allclose(meka[1], robot)
 
 
 def test_executed_errors_vanish_on_the_robots_own_ik(setup, demos):
