@@ -33,7 +33,7 @@ from lpa_transfer.exploration.babbling import BabblingProgram
 from lpa_transfer.exploration.correspondences import (PairCheck, SettlingStep,
                                                       collect_correspondences,
                                                       collect_guided_correspondences)
-from lpa_transfer.goal_babbling.experiment import derived_seeds
+from lpa_transfer.goal_babbling.seeds import derived_seeds
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.lfd.correspondences import (collect_demonstrator_correspondences,
                                               task_point_residuals)

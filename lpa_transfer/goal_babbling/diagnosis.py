@@ -55,7 +55,7 @@ graph (the learners then learn the joint positions reached, which may lag the co
 guided exploration pairs the joints each arm reached); evaluation stays on the analytic
 kinematics, as the learner node's. ``physics=None``: the analytic kinematics throughout.
 
-All random choices come from the run seed (``experiment.derived_seeds``) or fixed seeds.
+All random choices come from the run seed (``seeds.derived_seeds``) or fixed seeds.
 """
 from functools import lru_cache
 
@@ -63,10 +63,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from lpa_transfer.exploration.guided import guided_exploration
-from lpa_transfer.goal_babbling.experiment import (Experiment1, _test_points, derived_seeds,
-                                                   evaluation_times, source_experience)
+from lpa_transfer.goal_babbling.experiment import (Experiment1, _test_points, evaluation_times,
+                                                   source_experience)
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.goal_babbling.reaching import evaluation_points, reaching_errors
+from lpa_transfer.goal_babbling.seeds import derived_seeds
 from lpa_transfer.goal_babbling.transfer import transfer_experience
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer.exploration.correspondences import PairCheck, SettlingStep

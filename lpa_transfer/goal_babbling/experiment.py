@@ -20,6 +20,7 @@ from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_points
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer.goal_babbling.transfer import initialise_with_transfer, transfer_experience
+from lpa_transfer.goal_babbling.seeds import derived_seeds
 
 CONDITIONS = ("scratch", "PA", "LPA", "PA-guarded", "LPA-guarded")
 
@@ -81,14 +82,6 @@ class Curves(NamedTuple):
     mean_error: np.ndarray
     rate: np.ndarray
     n_transferred: np.ndarray
-
-
-def derived_seeds(seed):
-    """Independent integer seeds from one run seed: source babbling, target babbling, LPA,
-    and the target's babbling after a transfer where it cannot continue the guided
-    exploration's babbling (over the node graph the learner restarts its babbler)."""
-    check.check_int(seed, "seed", 0)
-    return [int(s.generate_state(1)[0]) for s in np.random.SeedSequence(seed).spawn(4)]
 
 
 def _babbler(config, environment, seed):

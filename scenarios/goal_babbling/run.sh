@@ -36,7 +36,7 @@ start target_guarded_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/targ
     -r __node:=guarded_learner $(sim_time target)
 PAIRS=()
 for seed in $SEEDS; do   # guided exploration with the target's babbling seed of this run
-    target_seed=$(python -c "from lpa_transfer.goal_babbling.experiment import derived_seeds
+    target_seed=$(python -c "from lpa_transfer.goal_babbling.seeds import derived_seeds
 print(derived_seeds($seed)[1])")
     step "guided_exploration_seed$seed" python -m lpa_transfer_nodes.correspondence_collector \
         "${PARAMS[@]}" -r __node:=guided_exploration -p "seed:=$target_seed" \

@@ -15,7 +15,7 @@ run would have collected. (With the collector's ``target_range: own`` the file a
 the target's rows of the commands the source could not follow: they are the target's own
 experience but not correspondences.)
 
-For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling.experiment.derived_seeds`):
+For every seed (its babbling seeds: :func:`lpa_transfer.goal_babbling.seeds.derived_seeds`):
 
 1. The source goal-babbles for ``source_seconds`` from scratch; its experience ξ_s is kept.
 2. ``scratch``: the target goal-babbles for ``total_seconds``, evaluated every ``interval`` s.
@@ -46,7 +46,7 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
 from lpa_transfer.exploration.correspondences import load_guided_exploration  # noqa: E402
-from lpa_transfer.goal_babbling.experiment import derived_seeds  # noqa: E402
+from lpa_transfer.goal_babbling.seeds import derived_seeds  # noqa: E402
 from lpa_transfer.goal_babbling.report import write_outputs  # noqa: E402
 from lpa_transfer.goal_babbling.transfer import padded_rows  # noqa: E402
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
