@@ -137,13 +137,19 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     return curves
 
 
+def transfer_errors(setup):
+    """Each transferred sample's error (m): Poppy's true kinematics of its command against
+    its task point."""
+    return np.linalg.norm(np.asarray(setup.arms["target"].forward(setup.commands))
+                          - setup.task_points, axis=1)
+
+
 def accuracy(rate, seed, total=5000.0, guided=600.0):
     """What caps the transfer (module docstring): a dict of the figures."""
     from scipy.spatial import cKDTree
     setup = prepare(rate, seed, total, guided)
     target, threshold = setup.arms["target"], setup.threshold
-    errors = np.linalg.norm(np.asarray(target.forward(setup.commands)) - setup.task_points,
-                            axis=1)
+    errors = transfer_errors(setup)
     scratch = setup.babbler("target", 1).start(target)
     _, own_points = scratch.run_for(total)
 
@@ -218,8 +224,7 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     home)."""
     setup = prepare(rate, seed, total, guided)
     target, points, threshold = setup.arms["target"], setup.points, setup.threshold
-    errors = np.linalg.norm(np.asarray(target.forward(setup.commands)) - setup.task_points,
-                            axis=1)
+    errors = transfer_errors(setup)
     bad = errors > threshold
 
     def final_rate(model):
