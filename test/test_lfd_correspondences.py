@@ -11,11 +11,13 @@ from test_lfd_robots import human_to_meka, human_to_pr2
 from lpa_transfer.lfd.correspondences import (JointMap, TaskFrame, babbling_limits,
                                               collect_demonstrator_correspondences, mapping_error,
                                               task_point_residuals)
-from lpa_transfer.robots.kinematics import arm_kinematics
+from lpa_transfer.lfd import correspondences
+from lpa_transfer.robots.inverse_kinematics import solve_many
+from lpa_transfer.robots.kinematics import arm_kinematics, robot_kinematics
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.serial_chain import forward_kinematics, rpy_matrix
+from lpa_transfer.robots.serial_chain import forward_kinematics, reach_sphere, rpy_matrix
 
 CONFIG = yaml.safe_load((ROOT / "scenarios" / "lfd" / "frames.yaml").read_text())
 HALF_PI = np.pi / 2
@@ -151,6 +153,31 @@ def test_correspondences_are_seeded(human, meka):
     for a, b in ((first.demonstrator, again.demonstrator), (first.robot, again.robot)):
         np.testing.assert_array_equal(a, b)
     assert first.robot.shape != other.robot.shape or not np.allclose(first.robot, other.robot)
+
+
+def test_points_beyond_the_demonstrators_reach_skip_their_ik_and_nothing_else_changes(
+        human, monkeypatch):
+    """Babbled points outside the human's reach sphere are dropped without their IK; the same
+    human given as a Kinematics (no chain to bound: every point through the IK) gives the
+    same pairs bit for bit. The PR2's babbling puts most of its points out of the human's
+    reach (76 % measured), so the IK is what it saves."""
+    robot, joint_map, frame = setup("pr2_right_arm")
+    centre, radius = reach_sphere(human)
+    solved = []          # the rows each IK call was given (the real solver runs)
+
+    def counting(forward, x_targets, *args, **kwargs):
+        solved.append(len(x_targets))
+        return solve_many(forward, x_targets, *args, **kwargs)
+
+    monkeypatch.setattr(correspondences, "solve_many", counting)
+    bounded = collect_demonstrator_correspondences(robot, human, joint_map, frame, 200, seed=5)
+    every = collect_demonstrator_correspondences(robot, robot_kinematics(human), joint_map,
+                                                 frame, 200, seed=5)
+    for field in bounded._fields:
+        np.testing.assert_array_equal(getattr(bounded, field), getattr(every, field))
+    assert solved[0] < 100 < solved[1] == 200   # most of the PR2's babbled points skipped
+    assert 0 < bounded.n_kept <= solved[0]
+    assert np.linalg.norm(bounded.demonstrator[:, 4:] - centre, axis=1).max() <= radius
 
 
 def test_redundancy_resolution_gives_consistent_human_poses(human, meka, meka_pairs):

@@ -117,6 +117,16 @@ def chain_frames(robot, q):
     return np.stack(_frames(robot, q, every=True), axis=1)
 
 
+def reach_sphere(robot):
+    """(centre (3,), radius): a ball in the world frame that holds the tool for every ``q``.
+    The centre is joint 0's origin, which no joint moves; the radius is the sum of
+    ``link_lengths``, by the triangle inequality over the joint origins and the tool (each
+    step between them is a fixed offset rotated). Used to skip the inverse kinematics of
+    points no pose can reach."""
+    centre = _frames(robot, np.zeros((1, robot.n_joints)), every=True)[0][0, :3, 3]
+    return centre.copy(), float(np.sum(robot.link_lengths))
+
+
 def tool_transforms(robot, q):
     """Homogeneous end-effector transforms T_tool(q) (N, 4, 4) in the world frame."""
     return _frames(robot, q, every=False)[-1]
