@@ -180,30 +180,6 @@ def test_the_task_markers_show_the_star_and_the_last_trial(smoke_run):
                 assert np.array_equal(drawn, expected), (robot, marker.ns)
 
 
-def test_spline_interpolation_puts_the_transferred_data_on_the_task(tmp_path):
-    """interpolation: spline (§5.4.1) over the graph at the smoke size, with the nearest-field
-    answer (nearest_answer.yaml: the youBot's learner then uses whatever data it got, so the
-    trial-1 error shows where they lie): the pairs and the Pincher's experience read off
-    splines start the youBot's transfer-PA far lower than the raw samples do (measured trial
-    1: 4.7 against 9.7 mm; scratch 13.4); learning from scratch is the same run in both."""
-    curves = {}
-    for interpolation in ("none", "spline"):
-        override = tmp_path / f"{interpolation}.yaml"
-        override.write_text("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
-                            "    conditions: [transfer-PA]\n"
-                            f"    interpolation: {interpolation}\n")
-        out = tmp_path / interpolation
-        result = run_scenario(SCENARIO, out, "config.yaml", timeout=480,
-                              overrides=["smoke.yaml", "nearest_answer.yaml", str(override)])
-        assert result.returncode == 0, result.stdout + result.stderr
-        curves[interpolation] = json.loads((out / "results.json").read_text())["curves_m"]
-    assert np.allclose(curves["spline"]["youbot/star1/uninitialised"],
-                       curves["none"]["youbot/star1/uninitialised"], rtol=1e-6, atol=0)
-    splined, sampled = (c["youbot/star1/transfer-PA"][0][0] for c in
-                        (curves["spline"], curves["none"]))
-    assert splined < 0.7 * sampled, (splined, sampled)
-
-
 def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, demo_share):
     """What `make demo` runs (demo.yaml), at the smoke size and as a share of the conditions
     (reference results are joined from shares): only the youBot is a target (the Pincher
