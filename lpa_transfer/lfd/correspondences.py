@@ -291,8 +291,8 @@ def collect_demonstrator_correspondences(robot, demonstrator, joint_map, task_fr
     limits = demonstrator.joint_limits
     starts = np.clip(joint_map.to_demonstrator(q_robot), limits[:, 0], limits[:, 1])
     # points beyond the demonstrator's reach by more than the tolerance are dropped without
-    # their IK (76 % of the PR2's babbled points for the human), which each would run to
-    # its last iteration; the other rows' IK does not depend on them (bit for bit)
+    # their IK, which each would run to its last iteration (most of the PR2's babbled points
+    # for the human, bench/README.md); the other rows' IK does not depend on them (bit for bit)
     tried = _within_reach(demonstrator_params, x_demo, ik_tolerance)
     q_demo, residuals = starts.copy(), np.full(n, np.inf)
     q_demo[tried], residuals[tried] = solve_many(demonstrator.forward, x_demo[tried],
