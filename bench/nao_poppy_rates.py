@@ -137,6 +137,26 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     return curves
 
 
+def from_scratch(setup, total):
+    """The target goal-babbling from scratch for ``total`` s (its babbling seed, as run's
+    "scratch"): (the babbler, its observed task points)."""
+    scratch = setup.babbler("target", 1).start(setup.arms["target"])
+    _, points = scratch.run_for(total)
+    return scratch, points
+
+
+def after_guided(setup, model, total, guided):
+    """``model`` (:func:`model_after_guided`) as the target babbles on from T_guided to
+    ``total`` with the after-transfer babbling seed, as run's conditions; returns it."""
+    setup.babbler("target", 3).start(setup.arms["target"], model).run_for(total - guided)
+    return model
+
+
+def unshared_joints(setup):
+    """The target's joints that the source does not have (Poppy's torso)."""
+    return [j for j in range(len(setup.home)) if j not in setup.shared["target"]]
+
+
 def transfer_errors(setup):
     """Each transferred sample's error (m): Poppy's true kinematics of its command against
     its task point."""
@@ -148,10 +168,9 @@ def accuracy(rate, seed, total=5000.0, guided=600.0):
     """What caps the transfer (module docstring): a dict of the figures."""
     from scipy.spatial import cKDTree
     setup = prepare(rate, seed, total, guided)
-    target, threshold = setup.arms["target"], setup.threshold
+    threshold = setup.threshold
     errors = transfer_errors(setup)
-    scratch = setup.babbler("target", 1).start(target)
-    _, own_points = scratch.run_for(total)
+    _, own_points = from_scratch(setup, total)
 
     def near(points):
         return float(np.mean(np.isfinite(cKDTree(points).query(
@@ -182,16 +201,15 @@ def mixing(rate, seed, total=5000.0, guided=600.0):
     n_before = len(model.inverse.X_)                 # guided pairs + transferred samples
     transferred = np.zeros(n_before, dtype=bool)
     transferred[n_before - len(setup.commands):] = True
-    setup.babbler("target", 3).start(target, model).run_for(total - guided)
+    after_guided(setup, model, total, guided)
     origin = np.zeros(len(model.inverse.X_), dtype=bool)
     origin[:n_before] = transferred
     _, neighbours = model.inverse.kneighbors(points)
     n_transferred = origin[neighbours].sum(axis=1)
     reached = reaching_errors(model.inverse, target, points) <= threshold
-    unshared = [j for j in range(len(setup.home)) if j not in setup.shared["target"]]
+    unshared = unshared_joints(setup)
     spread = np.ptp(model.inverse.Y_[neighbours][:, :, unshared], axis=1).max(axis=1)
-    scratch = setup.babbler("target", 1).start(target)
-    scratch.run_for(total)
+    scratch, _ = from_scratch(setup, total)
     scratch_reached = reaching_errors(scratch.model_.inverse, target, points) <= threshold
     groups = {"all own": n_transferred == 0,
               "mixed": (n_transferred > 0) & (n_transferred < neighbours.shape[1]),
@@ -231,11 +249,9 @@ def guard(rate, seed, total=5000.0, guided=600.0):
         return evaluate_reaching(model.inverse, target, points, threshold).rate
 
     def babbled(model):
-        setup.babbler("target", 3).start(target, model).run_for(total - guided)
-        return model
+        return after_guided(setup, model, total, guided)
 
-    scratch = setup.babbler("target", 1).start(target)
-    scratch.run_for(total)
+    scratch, _ = from_scratch(setup, total)
     guided_only = babbled(model_after_guided(setup, "guided only"))
     guarded = babbled(model_after_guided(setup, "LPA-guarded"))
     accurate = SimpleNamespace(**vars(setup))
@@ -247,7 +263,7 @@ def guard(rate, seed, total=5000.0, guided=600.0):
                "its own samples alone": final_rate(guarded.model),
                "LPA-guarded, accurate samples only": final_rate(
                    babbled(model_after_guided(accurate, "LPA-guarded")))}
-    unshared = [j for j in range(len(setup.home)) if j not in setup.shared["target"]]
+    unshared = unshared_joints(setup)
     figures["std of the unshared joints over the own samples: scratch / guided only / "
             "LPA-guarded (rad)"] = tuple(
         float(np.std(np.asarray(own.inverse.Y_)[:, unshared]))
