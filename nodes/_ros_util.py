@@ -505,27 +505,38 @@ def wait_for_subscribers(node, topic, count, timeout, stop):
         time.sleep(0.05)
 
 
-def call_service(executor, client, request, timeout, stop=None):
+def call_service(executor, client, request, timeout, stop=None, resend_every=None):
     """Call a service and wait for the answer with a ``spin_once`` loop (rclpy 7.1's
     ``spin_until_future_complete`` slows down with every call); ServiceTimeout after
-    ``timeout`` s, or as soon as the ``stop`` event (SIGINT/SIGTERM) is set."""
-    future = client.call_async(request)
+    ``timeout`` s, or as soon as the ``stop`` event (SIGINT/SIGTERM) is set.
+
+    ``resend_every`` (s), for idempotent requests only: a request not answered by then is
+    sent again (the earlier one's late answer is dropped). A request sent before discovery
+    has fully settled can be answered into the void (see :func:`wait_for_services`); seen in
+    CI on a learner's first reset under load, after the settle time.
+    """
     deadline = time.monotonic() + timeout
-    while not future.done():
-        stopped = stop is not None and stop.is_set()
-        if stopped or time.monotonic() > deadline:
-            client.remove_pending_request(future)
-            raise ServiceTimeout(f"stopped while waiting for {client.srv_name}" if stopped else
-                                 f"service {client.srv_name} did not answer within {timeout:g} s")
-        executor.spin_once(timeout_sec=0.05)
-    return future.result()
+    while True:
+        future = client.call_async(request)
+        resend = time.monotonic() + resend_every if resend_every else math.inf
+        while not future.done() and time.monotonic() < resend:
+            stopped = stop is not None and stop.is_set()
+            if stopped or time.monotonic() > deadline:
+                client.remove_pending_request(future)
+                raise ServiceTimeout(f"stopped while waiting for {client.srv_name}" if stopped
+                                     else f"service {client.srv_name} did not answer within "
+                                          f"{timeout:g} s")
+            executor.spin_once(timeout_sec=0.05)
+        if future.done():
+            return future.result()
+        client.remove_pending_request(future)
 
 
 def robot_stepper(call, client, name):
     """``step(command, n_steps) -> SimState`` over a robot_sim's StepRobot service.
 
-    ``call(client, request)`` makes the blocking call (e.g. :func:`call_service` bound to an
-    executor); a refused step raises RuntimeError with the simulator's message.
+    ``call(client, request, **options)`` makes the blocking call (e.g. :func:`call_service`
+    bound to an executor); a refused step raises RuntimeError with the simulator's message.
     """
     def step(command, n_steps):
         response = call(client, StepRobot.Request(command=[float(c) for c in command],
@@ -536,11 +547,17 @@ def robot_stepper(call, client, name):
     return step
 
 
+#: A reset not answered within this is sent again (a reset is idempotent: the same positions,
+#: the clock kept), see :func:`call_service`.
+RESET_RESEND_SECONDS = 3.0
+
+
 def robot_resetter(call, client, name):
     """``reset(positions) -> SimState`` over a robot_sim's ResetRobot service: the robot at rest
     at ``positions``; a refused reset raises RuntimeError with the simulator's message."""
     def reset(positions):
-        response = call(client, ResetRobot.Request(positions=[float(q) for q in positions]))
+        response = call(client, ResetRobot.Request(positions=[float(q) for q in positions]),
+                        resend_every=RESET_RESEND_SECONDS)
         if not response.success:
             raise RuntimeError(f"the {name} robot refused a reset: {response.message}")
         return sim_state(response)

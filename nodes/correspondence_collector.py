@@ -303,8 +303,8 @@ class CorrespondenceCollector(Node):
                                  self.joints["target"], self.guided_seconds, self.target_range)
 
     # -- talking to the robots and the mapping service ---------------------------------------
-    def call(self, client, request):
-        return call_service(self.spinner, client, request, self.call_timeout)
+    def call(self, client, request, **options):
+        return call_service(self.spinner, client, request, self.call_timeout, **options)
 
     def stepper(self, side):
         step = robot_stepper(self.call, self.step_clients[side], side)

@@ -223,10 +223,10 @@ class GoalBabblingLearner(Node):
         self.n_transferred = 0    # transferred samples learned like own data (unguarded)
 
     # -- robot -----------------------------------------------------------------------------------
-    def call(self, client, request):
+    def call(self, client, request, **options):
         try:
             return call_service(self.robot_clients.executor, client, request, self.call_timeout,
-                                self.stop)
+                                self.stop, **options)
         except ServiceTimeout:
             if self.stop.is_set():
                 raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot's "

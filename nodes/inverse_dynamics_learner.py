@@ -137,8 +137,9 @@ class InverseDynamicsLearner(Node):
         name, hyperparameters = self.regressor_spec
         return FeedForwardLearner(make_regressor(name, **hyperparameters), pid)
 
-    def call(self, client, request):
-        return call_service(self.robot_clients.executor, client, request, self.call_timeout)
+    def call(self, client, request, **options):
+        return call_service(self.robot_clients.executor, client, request, self.call_timeout,
+                            **options)
 
     def initialise(self, request, response):
         samples = from_matrix(request.samples, "samples")

@@ -82,8 +82,9 @@ class SkillLearner(Node):
             f"{self.robot.n_joints - self.n_joints} held at {self.home[self.n_joints:].tolist()}; "
             f"executed on {step_service} (settle_steps {self.settle_steps})")
 
-    def call(self, client, request):
-        return call_service(self.robot_clients.executor, client, request, self.call_timeout)
+    def call(self, client, request, **options):
+        return call_service(self.robot_clients.executor, client, request, self.call_timeout,
+                            **options)
 
     def demonstrations(self, request):
         """The requests' (times list, joints list), the column count checked."""

@@ -203,3 +203,39 @@ def test_sigint_exits_cleanly(tmp_path):
     finally:
         client.close()
     assert node.stop(signal.SIGINT, timeout=10) == 0, node.log()
+
+
+def test_a_reset_sent_before_the_simulator_listens_is_sent_again(tmp_path):
+    """A request sent before the server matched is lost (the race behind wait_for_services'
+    settle time, seen in CI); robot_resetter sends a reset again, since it is idempotent, and
+    gets its answer, where the same call sent once would wait in vain."""
+    from lpa_transfer_interfaces.srv import ResetRobot
+    from lpa_transfer_nodes._ros_util import ServiceTimeout, call_service, robot_resetter
+
+    domain_id = unique_domain_id()
+    client = ClientNode(domain_id, "reset_resend_client")
+    nodes = []
+    try:
+        def call_before_the_server(timeout):
+            reset_client = client.node.create_client(ResetRobot, "/robot_sim/reset")
+            def call(srv_client, request, **options):
+                assert not srv_client.service_is_ready()     # the first request goes nowhere
+                nodes.append(NodeProcess("robot_sim", domain_id, tmp_path / str(len(nodes)),
+                                         ros_params(robot=ROBOT, lockstep=True)))
+                return call_service(client.executor, srv_client, request, timeout, **options)
+            return reset_client, call
+
+        reset_client, call = call_before_the_server(60.0)
+        state = robot_resetter(call, reset_client, "two_link")([0.3, 0.2])
+        assert state.positions == pytest.approx([0.3, 0.2])
+        assert nodes.pop().stop() == 0
+
+        sent_once, call = call_before_the_server(10.0)
+        client.spin_until(lambda: not sent_once.service_is_ready(), timeout=10,
+                          what="the first robot_sim gone")
+        with pytest.raises(ServiceTimeout, match="did not answer within 10 s"):
+            call(sent_once, ResetRobot.Request(positions=[0.3, 0.2]))
+    finally:
+        client.close()
+        for node in nodes:
+            assert node.stop() == 0
