@@ -147,17 +147,47 @@ def test_compiled_em_sums_equal_the_numpy_sums(dim, n_components):
     assert (log_ratios < -700).any() and ((log_ratios < -512) & (log_ratios > -700)).any()
     expected = gmm._em_sums_numpy(X, features, resp)
     got = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
-                              resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR)
+                              resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR, gmm._LOG_FLOOR)
     assert not got[3].any()
     np.testing.assert_allclose(got[0], expected[0], rtol=1e-13)
     np.testing.assert_allclose(got[1], expected[1], rtol=1e-11, atol=1e-290)
     np.testing.assert_allclose(got[2], expected[2], rtol=1e-11, atol=1e-290)
+    # the cut at e^-50 of a row's peak: the same sums to rounding wherever n_k is not tiny
+    pruned = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
+                                 resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR, gmm._PRUNE)
+    assert ((log_ratios > -700) & (log_ratios <= gmm._PRUNE)).any()
+    kept = expected[1] > len(X) * np.exp(gmm._PRUNE) / np.finfo(float).eps
+    np.testing.assert_allclose(pruned[0], expected[0], rtol=1e-13)
+    np.testing.assert_allclose(pruned[1][kept], expected[1][kept], rtol=1e-11)
+    np.testing.assert_allclose(pruned[2][kept], expected[2][kept], rtol=1e-11, atol=1e-290)
     compiled = gmm._em_iteration(X, features, weights, means,
                                  gmm.precisions_cholesky(covariances), 1e-6)
     plain = gmm._em_iteration(X, features, weights, means,
                               gmm.precisions_cholesky(covariances), 1e-6, compiled=False)
     for a, b in zip(compiled, plain):
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_em_iteration_reruns_without_the_cut_for_a_starved_component():
+    """A component whose every responsibility lies between the floor and the cut (here
+    centred 20 standard deviations off the data) gets n_k = 0 from the pruned sums; the
+    iteration then sums again without the cut, and the component's weight and moments are
+    the numpy path's (tiny, not zero)."""
+    rng = np.random.default_rng(13)
+    X = rng.normal(size=(600, 2))
+    weights = np.full(4, 0.25)
+    means = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [20.0, 0.0]])
+    precisions = gmm.precisions_cholesky(np.tile(np.eye(2), (4, 1, 1)))
+    features = gmm.quadratic_features(X)
+    resp = gmm.Responsibilities(weights, means, precisions, np.zeros(2))
+    pruned = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
+                                 resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR, gmm._PRUNE)
+    assert pruned[1][3] == 0.0 and (pruned[1][:3] > 100).all()
+    got = gmm._em_iteration(X, features, weights, means, precisions, 1e-6)
+    plain = gmm._em_iteration(X, features, weights, means, precisions, 1e-6, compiled=False)
+    assert 0 < plain[1][3] < 1e-17 and 0 < plain[2][3, 0] < 1e-40
+    for a, b in zip(got, plain):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-300)
 
 
 def test_em_iteration_falls_back_to_numpy_for_overflowing_rows():
@@ -171,7 +201,8 @@ def test_em_iteration_falls_back_to_numpy_for_overflowing_rows():
     resp = gmm.Responsibilities(start[0], start[1], precisions, np.zeros(2))
     with np.errstate(over="ignore", invalid="ignore"):
         flagged = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
-                                      resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR)[3]
+                                      resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR,
+                                      gmm._PRUNE)[3]
         got = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6)
         plain = gmm._em_iteration(X, features, start[0], start[1], precisions, 1e-6,
                                   compiled=False)

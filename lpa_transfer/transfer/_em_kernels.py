@@ -29,8 +29,13 @@ _SLOW_EXP = -512.0
 
 
 @njit(cache=True)
-def em_sums(features, coefficients, constant, log_floor, exp_floor):
+def em_sums(features, coefficients, constant, log_floor, exp_floor, prune):
     """Σ_i log p(x_i), n_k = Σ_i γ_ik and Σ_i γ_ik features_i, under the given mixture.
+
+    Entries whose log-ratio to their row's peak is at most ``prune`` (>= ``log_floor``) are
+    left out of the sums and the row's total: each is below e^prune of the peak's share
+    (gmm.py says when that stays within rounding and when it reruns with ``prune`` at the
+    floor, which is the numpy path's arithmetic).
 
     ``features`` (N, F) are the points' quadratic features, ``coefficients`` (F, K) and
     ``constant`` (K,) the mixture's (gmm.Responsibilities). Rows whose log-densities are
@@ -63,11 +68,14 @@ def em_sums(features, coefficients, constant, log_floor, exp_floor):
         if not finite:
             far[i] = True
             continue
-        n_live = 0                       # the entries above the floor, without branches
+        n_live = 0                       # the entries above the cut, without branches
+        n_floored = 0
         for k in range(n_components):
+            ratio = log_density[k] - peak
             live[n_live] = k
-            n_live += log_density[k] - peak > log_floor
-        total = (n_components - n_live) * exp_floor
+            n_live += ratio > prune
+            n_floored += ratio <= log_floor
+        total = n_floored * exp_floor
         for j in range(n_live):
             k = live[j]
             ratio = log_density[k] - peak

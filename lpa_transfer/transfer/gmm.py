@@ -14,6 +14,9 @@ from lpa_transfer.transfer.procrustes import grouped_moments
 _LOG_2PI = np.log(2.0 * np.pi)
 _LOG_FLOOR = -700.0
 _EXP_FLOOR = np.exp(np.full(1, _LOG_FLOOR))[0]
+#: The compiled E-step leaves out responsibilities below e^_PRUNE of their row's largest
+#: (see _em_iteration).
+_PRUNE = -50.0
 #: Work-array size per block of rows: small enough to stay in cache.
 _BLOCK_ELEMENTS = 1 << 17
 
@@ -193,14 +196,25 @@ def _em_iteration(X, features, weights, means, precisions_chol, reg_covar, compi
     and the new weights, means and covariances. The sums run in compiled code
     (:mod:`._em_kernels`) point by point; the numpy path (block by block, also taken when a
     point is so far away that its quadratic overflows) computes the same to rounding.
+
+    The compiled sums leave out the responsibilities below e^_PRUNE (2e-22) of their row's
+    largest, most of a point's entries when hundreds of components lie in a low-dimensional
+    space. Left out, they change a row's total (at least 1) by less than K·e^_PRUNE, and a
+    component's n_k by less than N·e^_PRUNE, which is within rounding unless n_k itself is
+    below N·e^_PRUNE/ε; then the iteration runs again without the cut.
     """
     dim = X.shape[1]
     responsibilities = Responsibilities(weights, means, precisions_chol, np.zeros(dim))
     far = True
     if compiled:
+        features = np.ascontiguousarray(features)
+        coefficients = np.ascontiguousarray(responsibilities.coefficients)
         log_likelihood, n_k, sums, far = _em_kernels.em_sums(
-            np.ascontiguousarray(features), np.ascontiguousarray(responsibilities.coefficients),
-            responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR)
+            features, coefficients, responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR, _PRUNE)
+        if not np.any(far) and n_k.min() < len(X) * np.exp(_PRUNE) / np.finfo(float).eps:
+            log_likelihood, n_k, sums, far = _em_kernels.em_sums(
+                features, coefficients, responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR,
+                _LOG_FLOOR)
     if np.any(far):
         log_likelihood, n_k, sums = _em_sums_numpy(X, features, responsibilities)
     return _m_step(log_likelihood, n_k, sums, len(X), dim, reg_covar)
