@@ -6,7 +6,7 @@ from sklearn.mixture import GaussianMixture
 
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
 from lpa_transfer.transfer import _em_kernels, gmm, local_procrustes
-from lpa_transfer.transfer.init_em import cluster_errors, init_em
+from lpa_transfer.transfer.init_em import cluster_errors, init_em, two_means
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 from two_link import correspondences, mapping_rmse_mm
 
@@ -453,3 +453,16 @@ def test_finite_inputs_far_from_the_data_take_the_nearest_maps_never_zeros():
     near = source[:5]
     assert np.array_equal(model.transfer(near), model.transfer(np.vstack((near, 1e200 *
                                                                            direction)))[:5])
+
+
+@pytest.mark.parametrize("n_dims", [2, 7, 10, 20])
+def test_compiled_two_means_gives_the_numpy_halves(n_dims):
+    """initEM's compiled Lloyd iterations split every group as the numpy loop does, bit for
+    bit, below and above the 8 terms where numpy's summation turns pairwise."""
+    rng = np.random.default_rng(n_dims)
+    groups = np.sort(rng.integers(0, 40, 3000))
+    X = rng.normal(size=(3000, n_dims)) * rng.uniform(0.01, 10.0, n_dims) + groups[:, None]
+    compiled = two_means(X, groups, 40, np.random.default_rng(1))
+    plain = two_means(X, groups, 40, np.random.default_rng(1), compiled=False)
+    assert compiled.dtype == plain.dtype == bool
+    assert np.array_equal(compiled, plain) and 0.2 < plain.mean() < 0.8

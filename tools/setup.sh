@@ -109,9 +109,9 @@ if ! up_to_date project "$proj_hash"; then
     did_something=1
 fi
 
-# 7. The compiled kernels (numba) of LWPR and of LPA's EM, compiled once here and cached on
-# disk next to their modules, so that the first learner or mapping node does not stall
-# compiling them. Redone when the kernels or the requirements change.
+# 7. The compiled kernels (numba) of LWPR and of LPA's mixture fit (initEM, EM), compiled once
+# here and cached on disk next to their modules, so that the first learner or mapping node
+# does not stall compiling them. Redone when the kernels or the requirements change.
 kernels=(lpa_transfer/learners/_lwpr_kernels.py lpa_transfer/transfer/_em_kernels.py)
 kernel_hash=$( (echo "$req_hash"; sha256sum "${kernels[@]}") | digest)
 if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1 \

@@ -1,4 +1,6 @@
-"""Compiled E-step of the mixture's EM (thesis §3.4, eq. 3.8-3.9), fused with the M-step's sums.
+"""Compiled kernels of LPA's mixture fit: the E-step of the EM (thesis §3.4, eq. 3.8-3.9)
+fused with the M-step's sums (:func:`em_sums`), and initEM's Lloyd iterations (§3.5, Alg. 5;
+:func:`lloyd_two_means`).
 
 Why compiled: LPA's mixtures have hundreds of components in a low-dimensional clustering
 space (438 on the 2-link §3.6 pair at N = 5000), so a point's log-densities are a few
@@ -93,3 +95,76 @@ def em_sums(features, coefficients, constant, log_floor, exp_floor, prune):
             for f in range(n_features):
                 sums[k, f] += gamma * features[i, f]
     return log_likelihood, n_k, sums, far
+
+
+#: numpy's pairwise summation adds blocks of up to this many terms with 8 accumulators
+#: (numpy/_core/src/umath/loops_utils.h.src, PW_BLOCKSIZE); longer rows are not compiled here.
+PAIRWISE_BLOCK = 128
+
+
+@njit(inline="always")
+def _squared_distance(X, i, centres, c):
+    """||X[i] - centres[c]||², summed in the order of numpy's ``(diff ** 2).sum(axis=-1)``
+    for rows of at most PAIRWISE_BLOCK terms: plainly below 8 terms, else 8 interleaved
+    partial sums joined pairwise, then the rest."""
+    n_dims = X.shape[1]
+    if n_dims < 8:
+        total = 0.0
+        for j in range(n_dims):
+            diff = X[i, j] - centres[c, j]
+            total += diff * diff
+        return total
+    partial = np.empty(8)
+    for j in range(8):
+        diff = X[i, j] - centres[c, j]
+        partial[j] = diff * diff
+    j = 8
+    while j < n_dims - n_dims % 8:
+        for u in range(8):
+            diff = X[i, j + u] - centres[c, j + u]
+            partial[u] += diff * diff
+        j += 8
+    total = ((partial[0] + partial[1]) + (partial[2] + partial[3])) + \
+        ((partial[4] + partial[5]) + (partial[6] + partial[7]))
+    while j < n_dims:
+        diff = X[i, j] - centres[c, j]
+        total += diff * diff
+        j += 1
+    return total
+
+
+@njit(cache=True)
+def lloyd_two_means(X, groups, centres, max_iterations):
+    """Lloyd's iterations of init_em.two_means for all groups at once, with its arithmetic
+    (distances summed as numpy sums them, centre sums accumulated in row order as
+    ``bincount``): the same halves bit for bit. ``centres`` (2G, d) holds each group's two
+    seeds (rows 2g, 2g + 1) and is updated in place; returns the rows that go to the second
+    half (True where the second centre is strictly nearer).
+    """
+    n_rows, n_dims = X.shape
+    n_cells = centres.shape[0]
+    assignment = np.zeros(n_rows, dtype=np.bool_)
+    second_half = np.zeros(n_rows, dtype=np.bool_)
+    for iteration in range(max_iterations):
+        changed = iteration == 0
+        for i in range(n_rows):
+            cell = 2 * groups[i]
+            nearer = _squared_distance(X, i, centres, cell + 1) < \
+                _squared_distance(X, i, centres, cell)
+            changed |= nearer != second_half[i]
+            assignment[i] = nearer
+        if not changed:
+            break
+        second_half[:] = assignment
+        sizes = np.zeros(n_cells)
+        sums = np.zeros((n_cells, n_dims))
+        for i in range(n_rows):
+            cell = 2 * groups[i] + second_half[i]
+            sizes[cell] += 1.0
+            for j in range(n_dims):
+                sums[cell, j] += X[i, j]
+        for cell in range(n_cells):
+            if sizes[cell] > 0:
+                for j in range(n_dims):
+                    centres[cell, j] = sums[cell, j] / sizes[cell]
+    return second_half

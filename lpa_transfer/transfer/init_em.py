@@ -14,6 +14,7 @@ a few array operations however many clusters there are. Two choices the thesis l
 """
 import numpy as np
 
+from lpa_transfer.transfer import _em_kernels
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 
 _MAX_LLOYD_ITERATIONS = 100
@@ -27,11 +28,13 @@ def cluster_errors(source, target, labels, maps, counts):
     return np.sqrt(np.bincount(labels, weights=squared, minlength=len(counts))) / counts
 
 
-def two_means(X, groups, n_groups, rng):
+def two_means(X, groups, n_groups, rng, compiled=True):
     """Split each group of rows of X in two with Lloyd's 2-means (k-means++ seeding).
 
     ``groups`` (n,) labels rows 0..n_groups-1, sorted ascending. Returns a boolean array: True
-    for rows that go to the second half.
+    for rows that go to the second half. The Lloyd iterations run compiled
+    (:func:`._em_kernels.lloyd_two_means`, the same halves bit for bit) unless ``compiled``
+    is False.
     """
     counts = np.bincount(groups, minlength=n_groups)
     starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
@@ -44,6 +47,10 @@ def two_means(X, groups, n_groups, rng):
     second = np.searchsorted(cumulative, before + rng.random(n_groups) * totals, side="right")
     second = np.clip(second, starts, starts + counts - 1)
     centres = np.stack((X[first], X[second]), axis=1)                     # (G, 2, d)
+    if compiled and X.shape[1] <= _em_kernels.PAIRWISE_BLOCK:
+        return _em_kernels.lloyd_two_means(np.ascontiguousarray(X, dtype=np.float64),
+                                           groups, centres.reshape(2 * n_groups, -1),
+                                           _MAX_LLOYD_ITERATIONS)
     keys = 2 * groups
     second_half = None
     for _ in range(_MAX_LLOYD_ITERATIONS):
