@@ -236,7 +236,9 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     of scratch, guided exploration alone, LPA behind the guard, the guarded model's own
     samples alone, and LPA behind the guard given only the transferred samples within the
     threshold of Poppy's true kinematics (an oracle filter, as RobMech 2019 filtered by the
-    known error); which transferred samples the guard retired by the end (covered /
+    known error), and plain transfer whose every task point is Poppy's true kinematics of its
+    command (an exact mapping: the ceiling of any transfer of these commands, held at home in
+    the torso); which transferred samples the guard retired by the end (covered /
     contradicted / still active), split by their true error; and how far the own samples
     move the joints Nao does not have (Poppy's torso; every transferred sample holds it at
     home)."""
@@ -263,6 +265,9 @@ def guard(rate, seed, total=5000.0, guided=600.0):
                "its own samples alone": final_rate(guarded.model),
                "LPA-guarded, accurate samples only": final_rate(
                    babbled(model_after_guided(accurate, "LPA-guarded")))}
+    exact = SimpleNamespace(**vars(setup))
+    exact.task_points = np.asarray(target.forward(setup.commands))
+    figures["exact transfer"] = final_rate(babbled(model_after_guided(exact, "LPA")))
     unshared = unshared_joints(setup)
     figures["std of the unshared joints over the own samples: scratch / guided only / "
             "LPA-guarded (rad)"] = tuple(
