@@ -41,9 +41,11 @@ PY
 }
 
 # Every process gets its own session (setsid), so Ctrl-C reaches only this script, which then
-# stops them in order: the running step first, then the nodes in reverse start order, the
-# recorder last, so the bag holds everything the others published.
-PIDS=() NAMES=() CURRENT=""
+# stops them in order: the running step first, then the learners (every node that calls
+# others), then the servers they call (robot_sim, lpa_mapping, demonstration_source), the
+# recorder last, so the bag holds everything the others published. The nodes of one wave stop
+# side by side.
+PIDS=() NAMES=() MODULES=() CURRENT=""
 # LPA_HOSTS (set by scenarios/multi_host/run.sh): "NAME=NETNS ..." runs node or step NAME in
 # that network namespace (ip netns exec keeps the PID, so stopping works as on one host), with
 # the environment of LPA_HOST_ENV (e.g. discovery over the namespaces' subnet). NAME may be a
@@ -65,12 +67,15 @@ sim_time() { echo "-p use_sim_time:=true -r /clock:=/$1/clock"; }
 start() {   # start NAME MODULE ARGS...: a node in the background, its output in logs/NAME.log
     local name=$1 module=$2; shift 2
     setsid $(on_host "$name") python -m "lpa_transfer_nodes.$module" "$@" >"$OUT/logs/$name.log" 2>&1 &
-    PIDS+=($!) NAMES+=("$name")
+    PIDS+=($!) NAMES+=("$name") MODULES+=("$module")
 }
 FAILED=0
 stop_process() {   # stop_process PID NAME: SIGINT (the nodes finalise their files), SIGKILL after 20 s
+    kill -INT "$1" 2>/dev/null || true
+    await_process "$@"
+}
+await_process() {   # await_process PID NAME: wait for a signalled process, SIGKILL after 20 s
     local pid=$1 name=$2 waited=0 code=0
-    kill -INT "$pid" 2>/dev/null || true
     while kill -0 "$pid" 2>/dev/null && [ $waited -lt 200 ]; do sleep 0.1; waited=$((waited + 1)); done
     if kill -0 "$pid" 2>/dev/null; then
         echo "$name did not stop on SIGINT: killed" >&2; kill -KILL "$pid" 2>/dev/null || true
@@ -79,10 +84,23 @@ stop_process() {   # stop_process PID NAME: SIGINT (the nodes finalise their fil
     wait "$pid" || code=$?
     if [ $code != 0 ]; then echo "$name exited with $code (see $OUT/logs/$name.log)" >&2; FAILED=1; fi
 }
+stop_wave() {   # stop_wave INDEX...: SIGINT to each of these nodes at once, then wait for each
+    local i
+    for i in "$@"; do kill -INT "${PIDS[$i]}" 2>/dev/null || true; done
+    for i in "$@"; do await_process "${PIDS[$i]}" "${NAMES[$i]}"; done
+}
 stop_all() {
+    local i learners=() servers=() recorders=()
     if [ -n "$CURRENT" ]; then stop_process "$CURRENT" "$CURRENT_NAME"; CURRENT=""; fi
-    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do stop_process "${PIDS[$i]}" "${NAMES[$i]}"; done
-    PIDS=() NAMES=()
+    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do
+        case ${MODULES[$i]} in
+            recorder) recorders+=("$i") ;;
+            robot_sim|lpa_mapping|demonstration_source) servers+=("$i") ;;
+            *) learners+=("$i") ;;
+        esac
+    done
+    stop_wave "${learners[@]}"; stop_wave "${servers[@]}"; stop_wave "${recorders[@]}"
+    PIDS=() NAMES=() MODULES=()
 }
 trap stop_all EXIT
 trap 'echo "interrupted: stopping the nodes" >&2; stop_all; exit 130' INT TERM
