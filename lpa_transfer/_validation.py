@@ -67,15 +67,19 @@ def check_seed(value):
         check_int(value, "random_state", minimum=0)
 
 
-def check_fitted(model, attribute="coef_"):
-    """scikit-learn's NotFittedError (a ValueError) unless ``model`` has ``attribute``.
+def not_fitted(message):
+    """scikit-learn's NotFittedError (a ValueError and an AttributeError) with ``message``,
+    to raise. scikit-learn is imported here, not with the module, so that the nodes start
+    without loading it (lpa_transfer._estimator)."""
+    from sklearn.exceptions import NotFittedError
+    return NotFittedError(message)
 
-    scikit-learn is imported here, not with the module: the nodes that only check inputs
-    (robot_sim, recorder, player, markers) then start without loading it."""
+
+def check_fitted(model, attribute="coef_"):
+    """scikit-learn's NotFittedError (:func:`not_fitted`) unless ``model`` has ``attribute``."""
     if not hasattr(model, attribute):
-        from sklearn.exceptions import NotFittedError
-        raise NotFittedError(f"this {type(model).__name__} is not fitted yet: call "
-                             "fit(source, target) first")
+        raise not_fitted(f"this {type(model).__name__} is not fitted yet: call "
+                         "fit(source, target) first")
 
 
 def as_transfer_input(model, source):

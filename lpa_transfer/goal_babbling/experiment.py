@@ -7,9 +7,9 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from sklearn.base import clone
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import clone
 from lpa_transfer.robots.kinematics import Kinematics
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.exploration.guided import guided_exploration

@@ -12,7 +12,6 @@ them.
 """
 import numpy as np
 from scipy.spatial import cKDTree
-from sklearn.exceptions import NotFittedError
 
 from lpa_transfer import _validation as check
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
@@ -90,7 +89,7 @@ class _MergedKNN:
             parts.append((found, np.where(np.isfinite(found), self.weight, 0.0),
                           self.outputs[rows]))
         if not parts:
-            raise NotFittedError("the guarded model holds no samples yet")
+            raise check.not_fitted("the guarded model holds no samples yet")
         found, scale, outputs = (np.concatenate(part, axis=1) for part in zip(*parts))
         order = np.argsort(found, axis=1, kind="stable")[:, :k]
         found, scale = np.take_along_axis(found, order, 1), np.take_along_axis(scale, order, 1)

@@ -16,10 +16,9 @@ import numbers
 
 import numpy as np
 from scipy.spatial import cKDTree
-from sklearn.base import BaseEstimator
-from sklearn.exceptions import NotFittedError
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import Estimator
 
 #: Never rebuild the tree for fewer unindexed samples than this (brute force is cheap).
 _MIN_TAIL = 256
@@ -43,7 +42,7 @@ def _check_weights(sample_weight, n_rows):
     return weights
 
 
-class KNNRegressor(BaseEstimator):
+class KNNRegressor(Estimator):
     """Weighted k-nearest-neighbour regression, learning incrementally (§6.3.2, §6.5).
 
     The prediction for a query x is the weighted mean of the outputs of its K nearest
@@ -153,7 +152,7 @@ class KNNRegressor(BaseEstimator):
 
     def _check_fitted(self):
         if not hasattr(self, "n_samples_"):
-            raise NotFittedError(f"this {type(self).__name__} has no samples yet: call fit or "
+            raise check.not_fitted(f"this {type(self).__name__} has no samples yet: call fit or "
                                  "partial_fit first")
 
     def _view(self, buffer):

@@ -45,9 +45,9 @@ from movement_primitives.dmp import DMP
 # at once, which the public API does not offer; the pin movement_primitives==0.9.1
 # (requirements/python.txt) keeps them fixed and test/test_dmp.py checks what they compute.
 from movement_primitives.dmp._dmp import determine_forces, ridge_regression
-from sklearn.base import BaseEstimator
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import Estimator
 
 #: ``integrator`` values: the library's pure-Python step functions (identical on every
 #: install, whether or not its optional C extension was built).
@@ -91,7 +91,7 @@ def _as_vector(value, name, n):
     return value.copy()
 
 
-class JointDMP(BaseEstimator):
+class JointDMP(Estimator):
     """A DMP over d joints with a common phase (thesis eq. 4.1-4.5; module docstring).
 
     Parameters

@@ -19,9 +19,9 @@
 from typing import NamedTuple
 
 import numpy as np
-from sklearn.base import clone
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import clone
 from lpa_transfer.lfd.dmp import JointDMP
 from lpa_transfer.robots.inverse_kinematics import solve_path
 from lpa_transfer.lfd.correspondences import JointMap, TaskFrame

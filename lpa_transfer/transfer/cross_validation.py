@@ -8,8 +8,8 @@ columns in different units (rad, m) weigh alike: 0 is a perfect mapping, 1 is as
 predicting each column's mean.
 """
 import numpy as np
-from sklearn.base import clone
 
+from lpa_transfer._estimator import clone
 from lpa_transfer._validation import check_int
 
 

@@ -7,9 +7,9 @@ per cluster. Transfer (Alg. 4): ẑ_t = Σ_k γ_k(x_s) f_k(z_s) (eq. 3.10-3.12),
 responsibilities γ_k computed in the clustering space x_s (eq. 3.11).
 """
 import numpy as np
-from sklearn.base import BaseEstimator
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import Estimator
 from lpa_transfer.transfer import gmm
 from lpa_transfer.transfer.init_em import init_em
 from lpa_transfer.transfer.model_io import SavableModel
@@ -41,7 +41,7 @@ _SPARSE_PAIRS_PER_CLUSTER = 64
 _SPARSE_MAX_ELEMENTS = 1 << 23
 
 
-class LocalProcrustesAnalysis(SavableModel, BaseEstimator):
+class LocalProcrustesAnalysis(SavableModel, Estimator):
     """Local Procrustes Analysis (Alg. 3-5).
 
     Parameters

@@ -17,9 +17,9 @@ which collapses to the affine map ẑ_t = W z_s + b with W = B_t⁺ A B_s, b = �
 With d = D_s = D_t this is the least-squares affine regression from source to target.
 """
 import numpy as np
-from sklearn.base import BaseEstimator
 
 from lpa_transfer import _validation as check
+from lpa_transfer._estimator import Estimator
 from lpa_transfer.transfer.model_io import SavableModel
 
 #: Eigenvalues below RCOND times the largest one are treated as zero variance: their whitened
@@ -90,7 +90,7 @@ def procrustes_maps(means, covariances, n_source_dims, latent_dim):
                 coef=coef, intercept=intercept)
 
 
-class ProcrustesAnalysis(SavableModel, BaseEstimator):
+class ProcrustesAnalysis(SavableModel, Estimator):
     """Procrustes Analysis with PCA: a linear source -> target domain mapping (Alg. 1-2).
 
     Parameters
