@@ -1,5 +1,6 @@
-"""lpa_transfer._estimator: PA, LPA, the k-NN model and the DMP follow scikit-learn's estimator
-protocol without importing scikit-learn, so that the nodes built on them start without it."""
+"""lpa_transfer._estimator: PA, LPA, LWPR, the k-NN model and the DMP follow scikit-learn's
+estimator protocol without importing scikit-learn, so that the nodes built on them start
+without it (LWPR's full scikit-learn check is in test_lwpr.py)."""
 import subprocess
 import sys
 
@@ -17,12 +18,15 @@ from lpa_transfer.lfd.dmp import JointDMP
 @pytest.mark.parametrize("make", [lambda: LocalProcrustesAnalysis(n_min=9, cluster_dims=[0, 1]),
                                   lambda: ProcrustesAnalysis(latent_dim=2),
                                   lambda: KNNRegressor(n_neighbors=5),
-                                  lambda: JointDMP(n_weights_per_dim=12)])
+                                  lambda: JointDMP(n_weights_per_dim=12),
+                                  lambda: LWPR(init_D=np.eye(2), meta=True)])
 def test_scikit_learns_clone_and_ours_give_unfitted_equal_copies(make):
     model = make()
     for copy in (sklearn_clone(model), clone(model)):
         assert type(copy) is type(model) and copy is not model
-        assert repr(copy) == repr(model) and copy.get_params() == model.get_params()
+        assert repr(copy) == repr(model)
+        assert {k: str(v) for k, v in copy.get_params().items()} == \
+            {k: str(v) for k, v in model.get_params().items()}
 
 
 def test_fitted_state_is_not_cloned_and_parameters_are_set_by_name():
@@ -52,13 +56,16 @@ def test_nested_estimators_are_reached_as_scikit_learn_names_them():
 def test_not_fitted_is_scikit_learns_error():
     with pytest.raises(NotFittedError, match="no samples yet"):
         KNNRegressor().predict(np.zeros((1, 2)))
+    with pytest.raises(NotFittedError, match="LWPR is not fitted yet"):
+        LWPR().predict(np.zeros((1, 2)))
 
 
-@pytest.mark.parametrize("node", ["lpa_mapping", "goal_babbling_learner",
-                                  "correspondence_collector", "skill_learner", "robot_sim"])
+@pytest.mark.parametrize("node", ["lpa_mapping", "goal_babbling_learner", "skill_learner",
+                                  "inverse_dynamics_learner", "correspondence_collector",
+                                  "robot_sim"])
 def test_nodes_start_without_importing_scikit_learn(node):
     """scikit-learn's import (scipy.stats through sklearn.base) costs each node's start about
-    0.4-0.9 s; only the LWPR learners need it."""
+    0.4-0.9 s."""
     code = (f"import sys, lpa_transfer_nodes.{node}\n"
             "print(sorted({k.split('.')[0] for k in sys.modules} & {'sklearn'}))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

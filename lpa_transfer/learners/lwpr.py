@@ -77,10 +77,8 @@ import numbers
 
 import numpy as np
 from scipy.sparse import issparse
-from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.utils.validation import check_is_fitted
-
-from lpa_transfer._validation import as_matrix, check_float, check_int
+from lpa_transfer._estimator import Estimator, Regressor
+from lpa_transfer._validation import as_matrix, check_float, check_int, not_fitted
 from lpa_transfer.learners import _lwpr_kernels as _kernels
 
 #: Only RFs activated above this are updated (reference library).
@@ -262,7 +260,7 @@ class _Settings:
         self.__dict__.update(values)
 
 
-class LWPR(RegressorMixin, BaseEstimator):
+class LWPR(Regressor, Estimator):
     """Locally Weighted Projection Regression (Vijayakumar, D'Souza & Schaal 2005).
 
     An incremental, online learner: ``partial_fit`` / ``update`` learn one sample after the
@@ -400,7 +398,7 @@ class LWPR(RegressorMixin, BaseEstimator):
 
     @property
     def n_receptive_fields_(self):
-        check_is_fitted(self, "n_data_")
+        self._check_fitted()
         return np.bincount(self._rfs.out[:self._rfs.n], minlength=self.n_outputs_)
 
     @property
@@ -411,7 +409,7 @@ class LWPR(RegressorMixin, BaseEstimator):
         (diagonals if ``diag_only``), ``beta0``, ``beta``, ``U``, ``P`` (padded projection
         slots), ``n_projections``, ``n_data`` (discounted sample counts), ``trustworthy``.
         """
-        check_is_fitted(self, "n_data_")
+        self._check_fitted()
         rfs = self._rfs
         fields = []
         for j in range(self.n_outputs_):
@@ -492,8 +490,13 @@ class LWPR(RegressorMixin, BaseEstimator):
                              f"{self.n_outputs_} outputs")
         return X, Y
 
+    def _check_fitted(self):
+        if not hasattr(self, "n_data_"):
+            raise not_fitted(f"this {type(self).__name__} is not fitted yet: call fit or "
+                             "partial_fit first")
+
     def _check_queries(self, X):
-        check_is_fitted(self, "n_data_")
+        self._check_fitted()
         X, _ = _as_inputs(X, allow_single=False)
         self._check_width(X)
         return X / self.norm_in_
