@@ -77,6 +77,7 @@ import numbers
 
 import numpy as np
 from scipy.sparse import issparse
+
 from lpa_transfer._estimator import Estimator, Regressor
 from lpa_transfer._validation import as_matrix, check_float, check_int, not_fitted
 from lpa_transfer.learners import _lwpr_kernels as _kernels
