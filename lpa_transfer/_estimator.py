@@ -1,13 +1,13 @@
-"""scikit-learn's estimator protocol (``get_params``, ``set_params``, ``clone``, a regressor's
-``score`` and tags) without importing scikit-learn.
+"""scikit-learn's estimator protocol (``get_params``, ``set_params``, ``clone``) without
+importing scikit-learn.
 
 Why: importing ``sklearn.base`` loads scipy.stats and most of scikit-learn, which a node pays
-at every start (the mapping service, the learners, the collector). Our estimators only need
-the protocol: their hyperparameters are their ``__init__`` arguments, stored unchanged, and
-their learned state ends in ``_``. So ``sklearn.base.clone``, grid searches and pipelines'
-parameter handling work with them as with any BaseEstimator, and LWPR still passes
-scikit-learn's ``check_estimator``; scikit-learn is imported only by the methods that only
-scikit-learn's own tools call (``score``, ``__sklearn_tags__``) and to raise NotFittedError.
+at every start (the mapping service, the goal-babbling learner, the collector, the skill
+learner). PA, LPA, the k-NN sensorimotor model and the DMP only need the protocol: their
+hyperparameters are their ``__init__`` arguments, stored unchanged, and their learned state
+ends in ``_``. So ``sklearn.base.clone``, grid searches and pipelines' parameter handling work
+with them as with any BaseEstimator. LWPR stays a BaseEstimator: it is a full scikit-learn
+regressor (``check_estimator``).
 """
 import copy
 import inspect
@@ -73,26 +73,3 @@ def clone(estimator):
               and not isinstance(value, type) else copy.deepcopy(value)
               for name, value in estimator.get_params(deep=False).items()}
     return type(estimator)(**params)
-
-
-class Regressor:
-    """RegressorMixin's part of the protocol, for an :class:`Estimator` with ``predict``."""
-
-    def score(self, X, y, sample_weight=None):
-        """R² of the predictions of X against y (scikit-learn's ``RegressorMixin.score``)."""
-        from sklearn.metrics import r2_score
-        return r2_score(y, self.predict(X), sample_weight=sample_weight)
-
-    def __sklearn_tags__(self):
-        from sklearn.utils import RegressorTags, Tags, TargetTags
-        return Tags(estimator_type="regressor", target_tags=TargetTags(required=True),
-                    regressor_tags=RegressorTags())
-
-
-def is_fitted(model):
-    """Whether ``model`` has learned anything, by scikit-learn's rule (``check_is_fitted``
-    without attributes): its ``__sklearn_is_fitted__`` if it has one, else any attribute
-    ending in ``_``. For a caller that must not import scikit-learn to catch NotFittedError."""
-    if hasattr(model, "__sklearn_is_fitted__"):
-        return model.__sklearn_is_fitted__()
-    return any(name.endswith("_") and not name.startswith("__") for name in vars(model))

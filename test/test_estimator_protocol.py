@@ -1,6 +1,6 @@
-"""lpa_transfer._estimator: PA, LPA, LWPR, the k-NN model and the DMP follow scikit-learn's
-estimator protocol without importing scikit-learn, so that the nodes built on them start
-without it (LWPR's full scikit-learn check is in test_lwpr.py)."""
+"""lpa_transfer._estimator: PA, LPA, the k-NN model and the DMP follow scikit-learn's estimator
+protocol without importing scikit-learn, so that the nodes built on them start without it.
+LWPR stays a scikit-learn BaseEstimator (test_lwpr.py runs scikit-learn's checks on it)."""
 import subprocess
 import sys
 
@@ -56,13 +56,12 @@ def test_nested_estimators_are_reached_as_scikit_learn_names_them():
 def test_not_fitted_is_scikit_learns_error():
     with pytest.raises(NotFittedError, match="no samples yet"):
         KNNRegressor().predict(np.zeros((1, 2)))
-    with pytest.raises(NotFittedError, match="LWPR is not fitted yet"):
+    with pytest.raises(NotFittedError, match="LWPR instance is not fitted yet"):
         LWPR().predict(np.zeros((1, 2)))
 
 
 @pytest.mark.parametrize("node", ["lpa_mapping", "goal_babbling_learner", "skill_learner",
-                                  "inverse_dynamics_learner", "correspondence_collector",
-                                  "robot_sim"])
+                                  "correspondence_collector", "robot_sim"])
 def test_nodes_start_without_importing_scikit_learn(node):
     """scikit-learn's import (scipy.stats through sklearn.base) costs each node's start about
     0.4-0.9 s."""

@@ -15,8 +15,8 @@ infinite values are rejected and counted, never learned.
 from dataclasses import dataclass
 
 import numpy as np
+from sklearn.exceptions import NotFittedError
 
-from lpa_transfer._estimator import is_fitted
 from lpa_transfer.exploration.correspondences import feature_vector
 from lpa_transfer.inverse_dynamics.tasks import tracking_error
 
@@ -65,9 +65,10 @@ class FeedForwardLearner:
         return len(good)
 
     def feedforward(self, desired_state):
-        if not is_fitted(self.regressor):          # no data yet: the PID acts alone
+        try:
+            return np.asarray(self.regressor.predict(desired_state[None]), dtype=np.float64)[0]
+        except NotFittedError:
             return np.zeros(len(desired_state) // 3)
-        return np.asarray(self.regressor.predict(desired_state[None]), dtype=np.float64)[0]
 
     def observe(self, sample):
         """Learn one (q, q̇, q̈, τ) sample unless it holds NaN/inf (then count it)."""

@@ -77,9 +77,10 @@ import numbers
 
 import numpy as np
 from scipy.sparse import issparse
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
 
-from lpa_transfer._estimator import Estimator, Regressor
-from lpa_transfer._validation import as_matrix, check_float, check_int, not_fitted
+from lpa_transfer._validation import as_matrix, check_float, check_int
 from lpa_transfer.learners import _lwpr_kernels as _kernels
 
 #: Only RFs activated above this are updated (reference library).
@@ -261,7 +262,7 @@ class _Settings:
         self.__dict__.update(values)
 
 
-class LWPR(Regressor, Estimator):
+class LWPR(RegressorMixin, BaseEstimator):
     """Locally Weighted Projection Regression (Vijayakumar, D'Souza & Schaal 2005).
 
     An incremental, online learner: ``partial_fit`` / ``update`` learn one sample after the
@@ -399,7 +400,7 @@ class LWPR(Regressor, Estimator):
 
     @property
     def n_receptive_fields_(self):
-        self._check_fitted()
+        check_is_fitted(self, "n_data_")
         return np.bincount(self._rfs.out[:self._rfs.n], minlength=self.n_outputs_)
 
     @property
@@ -410,7 +411,7 @@ class LWPR(Regressor, Estimator):
         (diagonals if ``diag_only``), ``beta0``, ``beta``, ``U``, ``P`` (padded projection
         slots), ``n_projections``, ``n_data`` (discounted sample counts), ``trustworthy``.
         """
-        self._check_fitted()
+        check_is_fitted(self, "n_data_")
         rfs = self._rfs
         fields = []
         for j in range(self.n_outputs_):
@@ -491,13 +492,8 @@ class LWPR(Regressor, Estimator):
                              f"{self.n_outputs_} outputs")
         return X, Y
 
-    def _check_fitted(self):
-        if not hasattr(self, "n_data_"):
-            raise not_fitted(f"this {type(self).__name__} is not fitted yet: call fit or "
-                             "partial_fit first")
-
     def _check_queries(self, X):
-        self._check_fitted()
+        check_is_fitted(self, "n_data_")
         X, _ = _as_inputs(X, allow_single=False)
         self._check_width(X)
         return X / self.norm_in_
