@@ -5,9 +5,10 @@ Why: importing ``sklearn.base`` loads scipy.stats and most of scikit-learn, whic
 at every start (the mapping service, the goal-babbling learner, the collector, the skill
 learner). PA, LPA, the k-NN sensorimotor model and the DMP only need the protocol: their
 hyperparameters are their ``__init__`` arguments, stored unchanged, and their learned state
-ends in ``_``. So ``sklearn.base.clone``, grid searches and pipelines' parameter handling work
-with them as with any BaseEstimator. LWPR stays a BaseEstimator: it is a full scikit-learn
-regressor (``check_estimator``).
+ends in ``_``. So ``sklearn.base.clone`` and parameter handling by name (nested ones as
+``name__parameter``) work with them as with a BaseEstimator; scikit-learn's other machinery
+(metadata routing, HTML repr) is not offered. LWPR stays a BaseEstimator: it is a full
+scikit-learn regressor (``check_estimator``).
 """
 import copy
 import inspect
