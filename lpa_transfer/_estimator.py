@@ -29,7 +29,7 @@ class Estimator:
         params = {}
         for name in self._param_names():
             value = getattr(self, name)
-            if deep and hasattr(value, "get_params") and not isinstance(value, type):
+            if deep and _is_estimator(value):
                 params.update((f"{name}__{key}", nested)
                               for key, nested in value.get_params().items())
             params[name] = value
@@ -60,6 +60,11 @@ class Estimator:
         return f"{type(self).__name__}({', '.join(changed)})"
 
 
+def _is_estimator(value):
+    """An estimator instance (not a class): its parameters nest, it is cloned, not copied."""
+    return hasattr(value, "get_params") and not isinstance(value, type)
+
+
 def _is_default(value, default):
     try:
         return bool(value is default or value == default)
@@ -70,7 +75,6 @@ def _is_default(value, default):
 def clone(estimator):
     """An unfitted copy with the same hyperparameters (scikit-learn's ``clone``): nested
     estimators are cloned, other values deep-copied."""
-    params = {name: clone(value) if hasattr(value, "get_params")
-              and not isinstance(value, type) else copy.deepcopy(value)
+    params = {name: clone(value) if _is_estimator(value) else copy.deepcopy(value)
               for name, value in estimator.get_params(deep=False).items()}
     return type(estimator)(**params)

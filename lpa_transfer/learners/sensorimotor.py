@@ -152,8 +152,8 @@ class KNNRegressor(Estimator):
 
     def _check_fitted(self):
         if not hasattr(self, "n_samples_"):
-            raise check.not_fitted(f"this {type(self).__name__} has no samples yet: call fit or "
-                                 "partial_fit first")
+            raise check.not_fitted(f"this {type(self).__name__} has no samples yet: call "
+                                   "fit or partial_fit first")
 
     def _view(self, buffer):
         self._check_fitted()
