@@ -197,9 +197,9 @@ def test_em_iteration_falls_back_to_numpy_for_overflowing_rows():
     X = np.vstack((rng.normal(size=(200, 2)), [[1e160, -1e160]]))
     start = gmm.from_partition(X[:200], rng.integers(0, 3, 200), 3, 1e-6)
     precisions = gmm.precisions_cholesky(start[2])
-    features = gmm.quadratic_features(X)
     resp = gmm.Responsibilities(start[0], start[1], precisions, np.zeros(2))
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", invalid="ignore"):       # the overflow is the test's point
+        features = gmm.quadratic_features(X)
         flagged = _em_kernels.em_sums(np.ascontiguousarray(features), resp.coefficients,
                                       resp.constant, gmm._LOG_FLOOR, gmm._EXP_FLOOR,
                                       gmm._PRUNE)[3]
