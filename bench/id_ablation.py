@@ -5,7 +5,7 @@ alone and all together, in process, with the tables the thesis reports (§5.5.3)
 Usage, from the repository root::
 
     python -m bench.id_ablation run --setup S --seed N [--trials 15] [--out DIR]
-    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary]
+    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary] [--star-out STAR=DIR ...]
     python -m bench.id_ablation export --setup S --to RUN_DIR [--out DIR]
 
 ``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
@@ -185,23 +185,36 @@ def n_fields(learner):
     return 0 if rfs is None else rfs.n
 
 
-def load(out, setup):
-    """{key: [curve per seed]} and the seeds of one set-up's runs under ``out``."""
-    files = sorted((Path(out) / setup).glob("seed_*.json"),
-                   key=lambda p: int(p.stem.split("_")[1]))
-    runs = [json.loads(f.read_text()) for f in files]
-    if not runs:
-        return {}, []
-    keys = runs[0]["curves"].keys()
-    return ({k: [r["curves"][k] for r in runs] for k in keys}, [r["seed"] for r in runs])
+def load(out, setup, star_out=None):
+    """{key: [curve per seed]} and the seeds of one set-up's runs under ``out``; ``star_out``
+    ({star: directory}) takes those stars' curves from another run directory instead (e.g. a
+    trial budget per star; a star's curves do not depend on the other star's runs), over the
+    seeds that every directory holds."""
+    def one(directory):
+        files = (Path(directory) / setup).glob("seed_*.json")
+        return {run["seed"]: run["curves"] for run in map(json.loads, (f.read_text()
+                                                                       for f in files))}
+
+    by_seed = one(out)
+    others = {star: one(directory) for star, directory in (star_out or {}).items()}
+    seeds = sorted(set(by_seed).intersection(*others.values()))
+    curves = {}
+    for seed in seeds:
+        run = dict(by_seed[seed])
+        for star, other in others.items():
+            run.update({k: v for k, v in other[seed].items() if k.split("/")[1] == star})
+        for key, curve in run.items():
+            curves.setdefault(key, []).append(curve)
+    return curves, seeds
 
 
-def analysed(out, setup, robots=None):
-    """One set-up's runs and their convergence tables under both rules, or None when it has
-    no runs: a namespace of ``curves`` (mm), ``seeds``, ``robots`` (youBot first unless
-    given), ``stars``, ``n_trials``, ``metres`` (the curves in m) and ``tables`` (rule ->
-    :func:`convergence_table`'s rows and savings)."""
-    curves, seeds = load(out, setup)
+def analysed(out, setup, robots=None, star_out=None):
+    """One set-up's runs (``star_out`` as :func:`load`) and their convergence tables under
+    both rules, or None when it has no runs: a namespace of ``curves`` (mm), ``seeds``,
+    ``robots`` (youBot first unless given), ``stars``, ``n_trials`` ({star: trials}),
+    ``metres`` (the curves in m) and ``tables`` (rule -> :func:`convergence_table`'s rows and
+    savings)."""
+    curves, seeds = load(out, setup, star_out)
     if not curves:
         return None
     robots = robots or sorted({k.split("/")[0] for k in curves}, reverse=True)
@@ -210,7 +223,9 @@ def analysed(out, setup, robots=None):
     tables = {rule: convergence_table(metres, robots, stars, TOLERANCE, BABBLING_SECONDS,
                                       rule=rule) for rule in RULES}
     return SimpleNamespace(curves=curves, seeds=seeds, robots=robots, stars=stars,
-                           n_trials=len(next(iter(curves.values()))[0]), metres=metres,
+                           n_trials={s: len(next(v for k, v in curves.items()
+                                                  if k.split("/")[1] == s)[0]) for s in stars},
+                           metres=metres,
                            tables=tables)
 
 
@@ -219,24 +234,26 @@ def trials_text(k, n_trials):
     return str(k) if k <= n_trials else f"> {n_trials}"
 
 
-def report(out, setups):
-    """The ablation's tables as text."""
+def report(out, setups, star_out=None):
+    """The ablation's tables as text (``star_out`` as :func:`load`)."""
     lines = []
     for setup in setups:
-        result = analysed(out, setup)
+        result = analysed(out, setup, star_out=star_out)
         if result is None:
             continue
         n_trials, stars = result.n_trials, result.stars
         lines += [f"## {setup}: {json.dumps(SETUPS[setup])}", "",
-                  f"{len(result.seeds)} seed(s) {result.seeds}, {n_trials} trials; mm, mean over "
-                  f"the seeds", ""]
+                  f"{len(result.seeds)} seed(s) {result.seeds}, "
+                  + (f"{n_trials[stars[0]]} trials" if len(set(n_trials.values())) == 1 else
+                     ", ".join(f"{n} trials on {s}" for s, n in n_trials.items()))
+                  + "; mm, mean over the seeds", ""]
         trials = {rule: {(r, s, c): k for r, s, c, k, _ in rows}
                   for rule, (rows, _) in result.tables.items()}
         paired = (paired_against(result.metres, result.robots, stars) if len(result.seeds) > 1
                   else {})
         for robot in result.robots:
             lines.append(f"| {robot} | " + " | ".join(
-                f"{star} trial 1 | trial {n_trials} | conv. (scratch rule) | conv. (plateau)"
+                f"{star} trial 1 | trial {n_trials[star]} | conv. (scratch rule) | conv. (plateau)"
                 for star in stars) + " | saved (scratch rule) | saved (plateau) |")
             lines.append("|---" * (2 + 4 * len(stars) + 1) + "|")
             for condition in CONDITIONS:
@@ -244,7 +261,8 @@ def report(out, setups):
                 for star in stars:
                     mean = np.mean(result.curves[f"{robot}/{star}/{condition}"], axis=0)
                     cells += [f"{mean[0]:.2f}", f"{mean[-1]:.2f}",
-                              *[trials_text(trials[rule][robot, star, condition], n_trials)
+                              *[trials_text(trials[rule][robot, star, condition],
+                                            n_trials[star])
                                 for rule in RULES]]
                 saved = ["-", "-"] if condition == "uninitialised" else [
                     f"{100 * result.tables[rule][1][robot][condition]:.1f} %" for rule in RULES]
@@ -262,12 +280,12 @@ def report(out, setups):
     return "\n".join(lines)
 
 
-def summary(out, setups):
+def summary(out, setups, star_out=None):
     """One table per target robot, one row per set-up: learning from scratch's trials to
     convergence and first-trial error per star, the thesis conditions' first-trial errors, and
     the time saved per condition under both rules ("scratch rule / plateau")."""
     robots = ("youbot", "pincher")
-    runs = {setup: analysed(out, setup, list(robots)) for setup in setups}
+    runs = {setup: analysed(out, setup, list(robots), star_out) for setup in setups}
     lines = []
     for robot in robots:
         lines += [f"### {robot} as target ({THESIS[robot]['scratch']} trials from scratch, "
@@ -280,8 +298,8 @@ def summary(out, setups):
             if result is None:
                 continue
             converged = {(r, s, c): k for r, s, c, k, _ in result.tables["scratch"][0]}
-            scratch = " / ".join(trials_text(converged[robot, s, "uninitialised"], result.n_trials)
-                                 for s in result.stars)
+            scratch = " / ".join(trials_text(converged[robot, s, "uninitialised"],
+                                             result.n_trials[s]) for s in result.stars)
             firsts = [" / ".join(f"{np.mean(result.curves[f'{robot}/{s}/{c}'], axis=0)[0]:.1f}"
                                  for c in ("uninitialised", "random", "transfer-PA",
                                            "transfer-LPA")) for s in result.stars]
@@ -299,8 +317,9 @@ def export(out, setup, to):
     result = analysed(out, setup, ["youbot", "pincher"])
     if result is None:
         raise SystemExit(f"error: no runs of {setup} under {out}")
+    n_trials, = set(result.n_trials.values())           # one run directory: one budget
     experiment = SimpleNamespace(robots=result.robots, stars=result.stars,
-                                 n_trials=result.n_trials, tolerance=TOLERANCE,
+                                 n_trials=n_trials, tolerance=TOLERANCE,
                                  babbling_seconds=BABBLING_SECONDS, start_noise=0.0,
                                  done_seeds=result.seeds)
     curves = {key: runs.tolist() for key, runs in result.metres.items()}
@@ -322,6 +341,9 @@ def main(argv=None):
     many.add_argument("--setups", nargs="+", default=list(SETUPS))
     many.add_argument("--summary", action="store_true",
                       help="one table per robot across the set-ups instead of one per set-up")
+    many.add_argument("--star-out", nargs="+", default=[], metavar="STAR=DIR",
+                      help="take these stars' curves from another run directory (the same "
+                           "seeds), e.g. star1=DIR of 15-trial runs beside 20-trial runs")
     to = sub.add_parser("export")
     to.add_argument("--setup", choices=sorted(SETUPS), required=True)
     to.add_argument("--to", type=Path, required=True)
@@ -331,7 +353,8 @@ def main(argv=None):
         print(export(args.out, args.setup, args.to), end="")
         return 0
     if args.command == "report":
-        print((summary if args.summary else report)(args.out, args.setups))
+        star_out = dict(item.split("=", 1) for item in args.star_out)
+        print((summary if args.summary else report)(args.out, args.setups, star_out))
         return 0
     curves = run(args.setup, args.seed, args.trials)
     path = args.out / args.setup / f"seed_{args.seed}.json"
