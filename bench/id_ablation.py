@@ -191,9 +191,8 @@ def load(out, setup, star_out=None):
     trial budget per star; a star's curves do not depend on the other star's runs), over the
     seeds that every directory holds."""
     def one(directory):
-        files = (Path(directory) / setup).glob("seed_*.json")
-        return {run["seed"]: run["curves"] for run in map(json.loads, (f.read_text()
-                                                                       for f in files))}
+        runs = (json.loads(f.read_text()) for f in (Path(directory) / setup).glob("seed_*.json"))
+        return {run["seed"]: run["curves"] for run in runs}
 
     by_seed = one(out)
     others = {star: one(directory) for star, directory in (star_out or {}).items()}
