@@ -121,12 +121,14 @@ def run(setup, seed, n_trials, config_path=CONFIG):
                                                                    config_path)}
 
 
-def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
+def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, watch=None):
     """:func:`run`'s learner runs one by one: (target, star, condition, the target's StarRobot
     of that star, the learner after its last trial, the fields its initial data made, errors
     in m); per star (default: all; the
     babbling and the models always use all), learning from scratch of every robot first (each
-    source's experience), then ``targets``' (default: all) initialised conditions."""
+    source's experience), then ``targets``' (default: all) initialised conditions.
+    ``watch(target, star, condition, robot, learner, made, errors)``, if given, is called
+    after every trial of the targets' runs (the curves do not change)."""
     switches = SETUPS[setup]
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
@@ -159,7 +161,10 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
         for name in names:          # learning from scratch: the uninitialised curve and the
             robot = robots[star][name]                                        # experience
             learner = robot.learner()
-            errors, experience[name] = robot.trials(learner, n_trials)
+            hook = None if watch is None or (targets is not None and name not in targets) \
+                else (lambda model, so_far, n=name, r=robot:
+                      watch(n, star, "uninitialised", r, model, 0, so_far))
+            errors, experience[name] = robot.trials(learner, n_trials, after_trial=hook)
             yield name, star, "uninitialised", robot, learner, 0, errors
         for target in names if targets is None else targets:
             source = next(name for name in names if name != target)
@@ -175,7 +180,10 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None):
             for condition, samples in initial.items():
                 learner = robot.learner(samples)
                 made = n_fields(learner)
-                errors = robot.trials(learner, n_trials)[0]
+                hook = None if watch is None else (
+                    lambda model, so_far, c=condition, m=made:
+                    watch(target, star, c, robot, model, m, so_far))
+                errors = robot.trials(learner, n_trials, after_trial=hook)[0]
                 yield target, star, condition, robot, learner, made, errors
 
 

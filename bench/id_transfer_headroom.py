@@ -87,9 +87,10 @@ class StarRobot:
             learner.initialise(samples)
         return learner
 
-    def trials(self, learner, n_trials, start=None):
+    def trials(self, learner, n_trials, start=None, after_trial=None):
         """Tracking errors (m) and the experience of ``n_trials`` trials from rest at the centre
-        (or at the joint positions ``start``)."""
+        (or at the joint positions ``start``); ``after_trial(learner, errors)``, if given, is
+        called after each trial (to look at the learner as it learns)."""
         self.sim.reset(self.kinematics.home if start is None else start)
         state, errors, experience = self.sim.state(), [], []
         for _ in range(n_trials):
@@ -98,6 +99,8 @@ class StarRobot:
             state = trial.end_state
             errors.append(trial.tracking_error)
             experience.append(trial.samples)
+            if after_trial is not None:
+                after_trial(learner, errors)
         return errors, np.vstack(experience)
 
 
