@@ -5,7 +5,8 @@ alone and all together, in process, with the tables the thesis reports (§5.5.3)
 Usage, from the repository root::
 
     python -m bench.id_ablation run --setup S --seed N [--trials 15] [--out DIR]
-    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary] [--star-out STAR=DIR ...]
+    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary]
+        [--star-out STAR=DIR ...]
     python -m bench.id_ablation export --setup S --to RUN_DIR [--out DIR]
 
 ``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
@@ -156,15 +157,20 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
                 cluster_dims=list(range(2 * n_source)), random_state=seed,
                 **fit
             ).fit(pairs[source], pairs[target])}
+
+    def watcher(name, star, condition, robot, made):
+        """``after_trial`` for one run: ``watch`` with the run's context, for targets only."""
+        if watch is None or (targets is not None and name not in targets):
+            return None
+        return lambda model, so_far: watch(name, star, condition, robot, model, made, so_far)
+
     for star in experiment["stars"] if stars is None else stars:
         experience = {}
         for name in names:          # learning from scratch: the uninitialised curve and the
             robot = robots[star][name]                                        # experience
             learner = robot.learner()
-            hook = None if watch is None or (targets is not None and name not in targets) \
-                else (lambda model, so_far, n=name, r=robot:
-                      watch(n, star, "uninitialised", r, model, 0, so_far))
-            errors, experience[name] = robot.trials(learner, n_trials, after_trial=hook)
+            errors, experience[name] = robot.trials(
+                learner, n_trials, after_trial=watcher(name, star, "uninitialised", robot, 0))
             yield name, star, "uninitialised", robot, learner, 0, errors
         for target in names if targets is None else targets:
             source = next(name for name in names if name != target)
@@ -180,10 +186,8 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
             for condition, samples in initial.items():
                 learner = robot.learner(samples)
                 made = n_fields(learner)
-                hook = None if watch is None else (
-                    lambda model, so_far, c=condition, m=made:
-                    watch(target, star, c, robot, model, m, so_far))
-                errors = robot.trials(learner, n_trials, after_trial=hook)[0]
+                errors = robot.trials(learner, n_trials,
+                                      after_trial=watcher(target, star, condition, robot, made))[0]
                 yield target, star, condition, robot, learner, made, errors
 
 
