@@ -63,8 +63,8 @@ def test_not_fitted_is_scikit_learns_error():
 @pytest.mark.parametrize("node", ["lpa_mapping", "goal_babbling_learner", "skill_learner",
                                   "correspondence_collector", "robot_sim"])
 def test_nodes_start_without_importing_scikit_learn(node):
-    """scikit-learn's import (scipy.stats through sklearn.base) costs each node's start about
-    0.4-0.9 s."""
+    """scikit-learn's import (scipy.stats through sklearn.base) would lengthen each node's
+    start (measured in bench/README.md)."""
     code = (f"import sys, lpa_transfer_nodes.{node}\n"
             "print(sorted({k.split('.')[0] for k in sys.modules} & {'sklearn'}))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
