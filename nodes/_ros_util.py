@@ -10,6 +10,7 @@ import weakref
 
 import numpy as np
 import rclpy
+from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
@@ -48,6 +49,13 @@ CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 #: robot_description and /tf_static: latched (reliable, transient local, depth 1), as
 #: robot_state_publisher and tf2's static broadcaster offer them.
 LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+#: task_markers: latched as above, but the last MARKERS_DEPTH arrays stay with the writer
+#: until acknowledged, so a recorder that lags behind a few trials still records every array
+#: (with depth 1, an array not yet acknowledged is dropped when the next one is published); a
+#: late viewer replays them in order, each clearing the one before.
+MARKERS_DEPTH = 10
+MARKERS_QOS = QoSProfile(depth=MARKERS_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
 #: /tf: as tf2's TransformBroadcaster offers it (reliable, volatile, depth 100).
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
@@ -424,6 +432,7 @@ def spin_until_stopped(node, stop, executor_class=SingleThreadedExecutor):
                 # "run_trials as an action"): poll every 10 ms instead (cancels, parameters)
                 stop.wait(0.01)
         _drain(node, executor)
+        _deliver(node)
     except ExternalShutdownException:
         pass
     finally:
@@ -448,6 +457,18 @@ def _drain(node, executor, timeout=5.0):
                 executor.spin_once(timeout_sec=0.05)
             return
         executor.spin_once(timeout_sec=0.05)
+
+
+def _deliver(node, timeout=1.0):
+    """Before the node goes: wait (at most ``timeout`` s in all) until its subscribers have
+    acknowledged what its reliable publishers sent, so that a message published just before
+    SIGINT (a learner's last trial_result and task_markers) reaches the recorder rather than
+    dying with the process while DDS would still have resent it."""
+    deadline = time.monotonic() + timeout
+    for publisher in node.publishers:
+        left = deadline - time.monotonic()
+        if left <= 0 or not publisher.wait_for_all_acked(Duration(seconds=left)):
+            return
 
 
 class ServiceTimeout(RuntimeError):

@@ -2,7 +2,7 @@
 
 The learners publish what their robot is asked to do and what it did on ``~/task_markers``
 (``/<robot>/<learner>/task_markers``; latched, so a late viewer or the recorder gets the
-latest array): the chapter 5 star (desired path and the last trial's path), the chapter 6
+latest arrays): the chapter 5 star (desired path and the last trial's path), the chapter 6
 test points of the last evaluation (green: reached within the threshold, red: not), the
 chapter 4 letters as executed. All in frame ``world``, the frame of robot_sim's ``end_effector`` and ``/tf``.
 Each array is complete: a viewer shows the latest array and needs nothing before it.
@@ -12,7 +12,7 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from lpa_transfer_nodes._ros_util import LATCHED_QOS, WORLD_FRAME
+from lpa_transfer_nodes._ros_util import MARKERS_QOS, WORLD_FRAME
 
 TOPIC = "~/task_markers"   # one topic per learner: its DELETEALL clears only its own
 DESIRED, ACTUAL = (0.12, 0.47, 0.71, 1.0), (0.84, 0.15, 0.16, 1.0)
@@ -59,6 +59,6 @@ def marker_array(*markers):
 
 
 def task_marker_publisher(node):
-    """The node's latched ``~/task_markers`` publisher: the latest array reaches subscribers
-    that join later (the recorder, a viewer)."""
-    return node.create_publisher(MarkerArray, TOPIC, LATCHED_QOS)
+    """The node's latched ``~/task_markers`` publisher: the latest arrays reach subscribers
+    that join later (the recorder, a viewer); see MARKERS_QOS."""
+    return node.create_publisher(MarkerArray, TOPIC, MARKERS_QOS)

@@ -17,7 +17,7 @@ from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
 from visualization_msgs.msg import Marker, MarkerArray
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+from lpa_transfer_nodes._ros_util import MARKERS_DEPTH, MARKERS_QOS, from_matrix, to_matrix
 
 MEKA = ROOT / "scenarios" / "robots" / "meka_right_arm.toml"
 POSE = np.array([0.6, 0.4, 0.2, 1.2])      # a comfortable Meka pose (rad), inside the limits
@@ -156,3 +156,23 @@ def test_serves_after_bad_requests(learner):
         assert not client.call(learn, request).success
     answer = client.call(learn, good_request(), timeout=60)
     assert answer.success, answer.message + nodes[1].log()
+
+
+def test_a_late_viewer_gets_the_last_task_marker_arrays(learner):
+    """task_markers keeps its last MARKERS_DEPTH arrays for subscribers that join late (a
+    recorder that lags a trial or two must not lose one): after two more skills, a new
+    subscriber gets the arrays the early one got, in order, the last one last."""
+    client, learn, _, nodes = learner
+    for _ in range(2):
+        answer = client.call(learn, good_request(), timeout=60)
+        assert answer.success, answer.message + nodes[1].log()
+    client.spin_until(lambda: len(client.markers) >= 2, timeout=10, what="two marker arrays")
+    late = []
+    client.node.create_subscription(MarkerArray, "/meka/skill_learner/task_markers",
+                                    late.append, MARKERS_QOS)
+    expected = client.markers[-MARKERS_DEPTH:]
+    client.spin_until(lambda: len(late) >= len(expected), timeout=10, what="the latched arrays")
+    assert len(late) == len(expected) >= 2
+    for theirs, ours in zip(late, expected):
+        assert [[(p.x, p.y, p.z) for p in m.points] for m in theirs.markers] == [
+            [(p.x, p.y, p.z) for p in m.points] for m in ours.markers]
