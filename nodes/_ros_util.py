@@ -463,7 +463,10 @@ def _deliver(node, timeout=1.0):
     """Before the node goes: wait (at most ``timeout`` s in all) until its subscribers have
     acknowledged what its reliable publishers sent, so that a message published just before
     SIGINT (a learner's last trial_result and task_markers) reaches the recorder rather than
-    dying with the process while DDS would still have resent it."""
+    dying with the process while DDS would still have resent it. Nothing to wait for once
+    the context is shut down."""
+    if not rclpy.ok():
+        return
     deadline = time.monotonic() + timeout
     for publisher in node.publishers:
         left = deadline - time.monotonic()
