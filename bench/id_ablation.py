@@ -201,9 +201,9 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
 
 def gate_initial_fields(learner):
     """Make the learner's LWPR answer 0 for an output wherever the trustworthy fields that
-    would answer it are all fields its initial data made, none activated above ``w_gen``:
-    there learning from scratch has no field and answers 0 (the zero answer), the PID acts
-    alone. A diagnostic of issue 26's cap (how much do weak answers from initial data off
+    would answer it are all fields its initial data made, none activated above ``w_gen``,
+    as learning from scratch answers where it has no field of its own (the zero answer: the
+    PID acts alone). A diagnostic of issue 26's cap (how much do weak answers from initial data off
     the task cost?), not the thesis' LWPR. Fields are known by output and centre (an LWPR
     centre never moves; pruning moves rows)."""
     lwpr = learner.regressor
