@@ -218,9 +218,7 @@ def gate_initial_fields(learner):
     def gated(X):
         Y = np.array(predict(X), dtype=np.float64, ndmin=2)
         for i, x in enumerate(lwpr._check_queries(X)):
-            rows, w = rfs.activations(x, lwpr.cutoff)
-            keep = (w > lwpr.cutoff) & rfs.trust[rows]
-            rows, w = rows[keep], w[keep]
+            rows, w = rfs.answering(x, lwpr.cutoff)
             for o in np.unique(rfs.out[rows]):
                 mine = rfs.out[rows] == o
                 if w[mine].max() <= lwpr.w_gen and all(key(k) in initial for k in rows[mine]):

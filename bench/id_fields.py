@@ -51,9 +51,7 @@ def fields_on_task(learner, n_initial_fields, desired):
         rows, _ = rfs.activations(x, lwpr.w_gen)
         active.append(len(rows) / lwpr.n_outputs_)
         initial.append(np.mean(rows < n_initial_fields) if len(rows) else 0.0)
-        rows, w = rfs.activations(x, lwpr.cutoff)
-        keep = (w > lwpr.cutoff) & rfs.trust[rows]
-        rows, w = rows[keep], w[keep]
+        rows, w = rfs.answering(x, lwpr.cutoff)
         weight.append(w[rows < n_initial_fields].sum() / w.sum() if w.sum() > 0 else 0.0)
         alone.append(len(rows) > 0 and bool(np.all(rows < n_initial_fields)))
     alone = np.array(alone)

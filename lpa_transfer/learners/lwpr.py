@@ -230,11 +230,16 @@ class _ReceptiveFields:
                                           self.boxes, self.cfg.diag_only, near, act)
         return near[:count], act[:count]
 
-    def confidence(self, x, cutoff):
-        """Predictive standard deviation per output for one input (normalised units)."""
+    def answering(self, x, cutoff):
+        """The RFs a prediction for one input x averages over: the trustworthy ones activated
+        above ``cutoff``, (rows, activations)."""
         act, w = self.activations(x, cutoff)
         keep = (w > cutoff) & self.trust[act]
-        act, w = act[keep], w[keep]
+        return act[keep], w[keep]
+
+    def confidence(self, x, cutoff):
+        """Predictive standard deviation per output for one input (normalised units)."""
+        act, w = self.answering(x, cutoff)
         n_reg, rows = self.n_reg[act], np.arange(len(act))
         last = n_reg - 1
         stat = {name: self.proj_stats[act, i] for i, name in enumerate(_PROJ_STATS)}
