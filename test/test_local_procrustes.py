@@ -168,6 +168,25 @@ def test_compiled_em_sums_equal_the_numpy_sums(dim, n_components):
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("n_components", [7, 60])
+def test_the_compiled_mean_log_likelihood_is_the_numpy_one(n_components):
+    """initEM's runs are ranked by the compiled E-step's log-likelihood (its M-step sums left
+    out): the numpy path's to rounding, also on a narrow mixture (entries below the cut and
+    the floor), and the numpy path's own value where a point overflows (-inf)."""
+    rng = np.random.default_rng(14)
+    X = rng.normal(size=(700, 3)) * [1.0, 2.0, 3.0] + 5.0             # away from the origin
+    start = gmm.from_partition(X, rng.integers(0, n_components, len(X)), n_components, 1e-6)
+    means, covariances = X[rng.choice(len(X), n_components)], start[2] * 0.05
+    expected = gmm.log_likelihoods(X, start[0], means,
+                                   gmm.precisions_cholesky(covariances)).mean()
+    got = gmm.mean_log_likelihood(X, start[0], means, covariances)
+    assert np.isfinite(got) and got != 0.0
+    np.testing.assert_allclose(got, expected, rtol=1e-12)
+    far = np.vstack((X, [[1e160, -1e160, 0.0]]))
+    with np.errstate(over="ignore", invalid="ignore"):
+        assert gmm.mean_log_likelihood(far, start[0], means, covariances) == -np.inf
+
+
 def test_em_iteration_reruns_without_the_cut_for_a_starved_component():
     """A component whose every responsibility lies between the floor and the cut (here
     centred 20 standard deviations off the data) gets n_k = 0 from the pruned sums; the

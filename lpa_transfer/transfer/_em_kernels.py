@@ -30,9 +30,41 @@ from numba import njit
 _SLOW_EXP = -512.0
 
 
+@njit(inline="always")
+def _add_constant(log_density, constant):
+    """Adds ``constant`` to ``log_density`` in place; returns the largest entry and a number
+    that is finite only when every entry is (0 * inf and 0 * nan are nan). Four independent
+    accumulators, so the pass is not one serial chain of compares: max is exact in any
+    order, and the check is 0 or nan whatever the order."""
+    n_components = constant.shape[0]
+    peak0 = peak1 = peak2 = peak3 = -np.inf
+    check0 = check1 = check2 = check3 = 0.0
+    whole = n_components - n_components % 4
+    for k in range(0, whole, 4):
+        value0 = log_density[k] + constant[k]
+        value1 = log_density[k + 1] + constant[k + 1]
+        value2 = log_density[k + 2] + constant[k + 2]
+        value3 = log_density[k + 3] + constant[k + 3]
+        log_density[k], log_density[k + 1] = value0, value1
+        log_density[k + 2], log_density[k + 3] = value2, value3
+        check0 += 0.0 * value0
+        check1 += 0.0 * value1
+        check2 += 0.0 * value2
+        check3 += 0.0 * value3
+        peak0, peak1 = max(peak0, value0), max(peak1, value1)
+        peak2, peak3 = max(peak2, value2), max(peak3, value3)
+    for k in range(whole, n_components):
+        value0 = log_density[k] + constant[k]
+        log_density[k] = value0
+        check0 += 0.0 * value0
+        peak0 = max(peak0, value0)
+    return max(max(peak0, peak1), max(peak2, peak3)), (check0 + check1) + (check2 + check3)
+
+
 @njit(cache=True)
-def em_sums(features, coefficients, constant, log_floor, exp_floor, prune):
+def em_sums(features, coefficients, constant, log_floor, exp_floor, prune, with_sums=True):
     """Σ_i log p(x_i), n_k = Σ_i γ_ik and Σ_i γ_ik features_i, under the given mixture.
+    ``with_sums`` False computes Σ_i log p(x_i) alone (n_k and the sums stay 0).
 
     Entries whose log-ratio to their row's peak is at most ``prune`` (>= ``log_floor``) are
     left out of the sums and the row's total: each is below e^prune of the peak's share
@@ -59,15 +91,8 @@ def em_sums(features, coefficients, constant, log_floor, exp_floor, prune):
             value = features[i, f]
             for k in range(n_components):
                 log_density[k] += value * coefficients[f, k]
-        peak = -np.inf
-        finite = True
-        for k in range(n_components):
-            log_density[k] += constant[k]
-            if not math.isfinite(log_density[k]):
-                finite = False
-            elif log_density[k] > peak:
-                peak = log_density[k]
-        if not finite:
+        peak, check = _add_constant(log_density, constant)
+        if not math.isfinite(check):
             far[i] = True
             continue
         n_live = 0                       # the entries above the cut, without branches
@@ -88,6 +113,8 @@ def em_sums(features, coefficients, constant, log_floor, exp_floor, prune):
                 log_density[k] = half * half
             total += log_density[k]
         log_likelihood += peak + math.log(total)
+        if not with_sums:
+            continue
         for j in range(n_live):
             k = live[j]
             gamma = log_density[k] / total

@@ -184,8 +184,23 @@ def responsibilities(X, weights, means, precisions_chol):
 
 
 def mean_log_likelihood(X, weights, means, covariances):
-    """Average log-likelihood of X under the mixture; used to rank initEM runs (§3.5)."""
-    return log_likelihoods(X, weights, means, precisions_cholesky(covariances)).mean()
+    """Average log-likelihood of X under the mixture; used to rank initEM runs (§3.5).
+
+    Computed as the EM's compiled E-step computes it (:func:`_em_iteration`, without the
+    M-step's sums): it leaves out entries below e^_PRUNE of a row's peak, which changes the
+    row's total by less than K·e^_PRUNE relative, within the rounding of its log. Points so
+    far away that the expanded quadratic overflows take the numpy path.
+    """
+    precisions_chol = precisions_cholesky(covariances)
+    centre = X.mean(axis=0)
+    features = np.ascontiguousarray(quadratic_features(X - centre))
+    centred = Responsibilities(weights, means - centre, precisions_chol, np.zeros(X.shape[1]))
+    log_likelihood, _, _, far = _em_kernels.em_sums(
+        features, np.ascontiguousarray(centred.coefficients), centred.constant, _LOG_FLOOR,
+        _EXP_FLOOR, _PRUNE, False)
+    if np.any(far):
+        return log_likelihoods(X, weights, means, precisions_chol).mean()
+    return log_likelihood / len(X)
 
 
 def _em_iteration(X, features, weights, means, precisions_chol, reg_covar, compiled=True):
