@@ -8,7 +8,8 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
                                                     bootstrap_savings, convergence_table,
-                                                    paired_against, trials_to_convergence)
+                                                    paired_against, per_seed_savings,
+                                                    trials_to_convergence)
 from lpa_transfer.inverse_dynamics.report import merge
 
 
@@ -63,6 +64,24 @@ def test_bootstrap_over_seeds_brackets_the_saving_and_counts_who_saves_more():
     again = bootstrap_savings(mixed, ["a"], ["star1"], 0.1, 2.0, n_resamples=400)
     assert again["a"]["transfer-PA"] == (low, high, more, as_much, less)     # seeded
 
+
+
+def test_seed_by_seed_savings_judge_each_seed_by_its_own_curves():
+    """Each seed's curves alone give its saving (not the mean curve's): transfer-PA converges
+    at trial 1 on three seeds and never on one, where the mean curve converges at trial 3;
+    random at trial 2 on every seed, so transfer-PA saves more on 3 seeds and less on 1."""
+    scratch = [[4.0, 2.0, 1.0]] * 4
+    curves = {"a/star1/uninitialised": scratch, "a/star1/random": [[2.0, 1.0, 1.0]] * 4,
+              "a/star1/transfer-PA": [[1.0, 1.0, 1.0]] * 3 + [[9.0, 9.0, 9.0]]}
+    table = per_seed_savings(curves, ["a"], ["star1"], 0.1, 2.0)
+    saved, (more, less, n, p) = table["a"]["transfer-PA"]
+    one = 1 - (TRIAL_SECONDS + 2.0) / (3 * TRIAL_SECONDS)
+    never = 1 - (4 * TRIAL_SECONDS + 2.0) / (3 * TRIAL_SECONDS)
+    np.testing.assert_allclose(saved, [one, one, one, never])
+    assert (more, less, n) == (3, 1, 4) and 0 < p <= 1
+    _, mean_savings = convergence_table(curves, ["a"], ["star1"], 0.1, 2.0)
+    assert mean_savings["a"]["transfer-PA"] == pytest.approx(never)   # the mean curve's view
+    assert np.isnan(table["a"]["random"][1][3])
 
 
 def test_a_run_of_learning_from_scratch_only_has_nothing_to_bootstrap():

@@ -110,6 +110,33 @@ def bootstrap_savings(curves, robots, stars, tolerance, babbling_seconds, n_resa
     return summary
 
 
+def per_seed_savings(curves, robots, stars, tolerance, babbling_seconds, reference="random"):
+    """:func:`convergence_table`'s time saved (scratch rule) seed by seed, each seed's curves
+    alone as the thesis' one run per condition, and each condition against ``reference`` over
+    the seeds (a seed's conditions share its start and babbling, so they pair). Per target
+    robot and initialised condition: ``(saved (n_seeds,), (more, less, n, p))``, in how many
+    seeds it saves more and less than ``reference`` and Wilcoxon's p
+    (:func:`lpa_transfer.evaluation.learning_curves.paired_comparison`; nan for
+    ``reference``)."""
+    n_seeds = len(next(iter(curves.values())))
+    saved = {}
+    for seed in range(n_seeds):
+        _, savings = convergence_table({key: np.asarray(runs)[[seed]] for key, runs in
+                                        curves.items()}, robots, stars, tolerance,
+                                       babbling_seconds)
+        for robot, by_condition in savings.items():
+            for condition, value in by_condition.items():
+                saved.setdefault(robot, {}).setdefault(condition, []).append(value)
+    table = {}
+    for robot, by_condition in saved.items():
+        base = by_condition.get(reference)
+        table[robot] = {c: (np.asarray(v), paired_comparison(v, base)
+                            if base is not None and c != reference else
+                            (0, 0, len(v), float("nan")))
+                        for c, v in by_condition.items()}
+    return table
+
+
 def paired_against(curves, robots, stars, early_trials=5, reference="random"):
     """Each initialised condition against ``reference`` seed by seed (a seed's conditions
     share its start and its babbling, so they pair): per robot, star and condition, for the

@@ -17,7 +17,8 @@ from matplotlib.ticker import LogFormatter, ScalarFormatter
 from lpa_transfer.inverse_dynamics.analysis import (PLATEAU_WINDOW, TRIAL_SECONDS,
                                                     bootstrap_savings,
                                                     conditions_in, convergence_table,
-                                                    paired_against, simulated_seconds)
+                                                    paired_against, per_seed_savings,
+                                                    simulated_seconds)
 
 
 SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # in results.json
@@ -72,6 +73,7 @@ def write_outputs(curves, traces, experiment, out, where="over the node graph"):
     first_rows, first_savings = convergence_table(*args, stay=False)
     plateau_rows, plateau_savings = convergence_table(*args, rule="plateau")
     intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
+    by_seed = per_seed_savings(*args)
     other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
                                   experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
     lines = [f"Thesis §5.5.3 {where}: {len(experiment.done_seeds)} seed(s) "
@@ -117,6 +119,13 @@ def write_outputs(curves, traces, experiment, out, where="over the node graph"):
                      + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
                                  for c, (_, _, more, same, less) in intervals[robot].items()
                                  if c != "random"))
+        lines.append("  seed by seed (each seed's curves alone, as the thesis' one run per "
+                     "condition), converged: median [quartiles], seeds saving more / less than "
+                     "random (Wilcoxon p): " + ", ".join(
+                         f"{c} {100 * np.median(v):.1f}% [{100 * np.percentile(v, 25):.1f}, "
+                         f"{100 * np.percentile(v, 75):.1f}]"
+                         + ("" if c == "random" else f" {more}/{less} (p {p:.3f})")
+                         for c, (v, (more, less, _, p)) in by_seed[robot].items()))
         lines.append(f"  thesis: {THESIS.get(robot, '-')}")
     lines.append("")
     if "random" in conditions_in(curves):
