@@ -90,6 +90,8 @@ def test_a_run_of_learning_from_scratch_only_has_nothing_to_bootstrap():
     scratch = {f"{robot}/star1/uninitialised": [[4.0, 2.0, 1.0]] * 2 for robot in ("a", "b")}
     assert bootstrap_savings(scratch, ["a", "b"], ["star1"], 0.1, 2.0, n_resamples=5) == \
         {"a": {}, "b": {}}
+    assert per_seed_savings(scratch, ["a", "b"], ["star1"], 0.1, 2.0) == {"a": {}, "b": {}}
+
 
 def test_paired_comparison_counts_the_seeds_each_condition_beats_random_in():
     """Seed by seed against random: lower early on every seed of 6 gives Wilcoxon's exact

@@ -124,9 +124,10 @@ def per_seed_savings(curves, robots, stars, tolerance, babbling_seconds, referen
         _, savings = convergence_table({key: np.asarray(runs)[[seed]] for key, runs in
                                         curves.items()}, robots, stars, tolerance,
                                        babbling_seconds)
-        for robot, by_condition in savings.items():
+        for robot, by_condition in savings.items():      # every robot, also with no conditions
             for condition, value in by_condition.items():
                 saved.setdefault(robot, {}).setdefault(condition, []).append(value)
+            saved.setdefault(robot, {})
     table = {}
     for robot, by_condition in saved.items():
         base = by_condition.get(reference)
