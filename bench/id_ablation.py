@@ -128,14 +128,11 @@ def run(setup, seed, n_trials, config_path=CONFIG):
                                                                    config_path)}
 
 
-def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, watch=None):
-    """:func:`run`'s learner runs one by one: (target, star, condition, the target's StarRobot
-    of that star, the learner after its last trial, the fields its initial data made, errors
-    in m); per star (default: all; the
-    babbling and the models always use all), learning from scratch of every robot first (each
-    source's experience), then ``targets``' (default: all) initialised conditions.
-    ``watch(target, star, condition, robot, learner, made, errors)``, if given, is called
-    after every trial of the targets' runs (the curves do not change)."""
+def set_up(setup, seed, config_path=CONFIG):
+    """What every learner run of ``setup`` and ``seed`` starts from, as the graph's experiment
+    makes it: (the experiment's parameters, the robot names, {star: {name: StarRobot}}, the
+    babbling session's pairs {name: rows of both stars}, {target: {"PA", "LPA": the mapping
+    from the other robot, fitted on all the pairs}})."""
     switches = SETUPS[setup]
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
@@ -143,14 +140,13 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]                       # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])
-    interpolation = switches.get("interpolation", "none")
     line = config["/babbling/*"]["ros__parameters"]["samples_per_segment"]
     robots = {star: {name: StarRobot(config, name, star, switches.get("actuator", "torque"))
                      .configure(config, name, star, switches.get("time_law"),
                                 {**BASE_LWPR, **switches.get("lwpr", {})})
                      for name in names} for star in experiment["stars"]}
     dt = robots[experiment["stars"][0]][names[0]].dt
-    pairs = {name: interpolated(rows, interpolation, line, dt)
+    pairs = {name: interpolated(rows, switches.get("interpolation", "none"), line, dt)
              for name, rows in babble_session(config, robots, seed).items()}
     models = {}
     for target in names:
@@ -163,6 +159,21 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
                 cluster_dims=list(range(2 * n_source)), random_state=seed,
                 **fit
             ).fit(pairs[source], pairs[target])}
+    return experiment, names, robots, pairs, models
+
+
+def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, watch=None):
+    """:func:`run`'s learner runs one by one: (target, star, condition, the target's StarRobot
+    of that star, the learner after its last trial, the fields its initial data made, errors
+    in m); per star (default: all; the
+    babbling and the models always use all), learning from scratch of every robot first (each
+    source's experience), then ``targets``' (default: all) initialised conditions.
+    ``watch(target, star, condition, robot, learner, made, errors)``, if given, is called
+    after every trial of the targets' runs (the curves do not change)."""
+    switches = SETUPS[setup]
+    experiment, names, robots, pairs, models = set_up(setup, seed, config_path)
+    interpolation = switches.get("interpolation", "none")
+    dt = robots[experiment["stars"][0]][names[0]].dt
 
     def watcher(name, star, condition, robot, made):
         """``after_trial`` for one run: ``watch`` with the run's context, for targets only."""
