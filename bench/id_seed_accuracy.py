@@ -5,14 +5,15 @@ beside the time the seed's transfer saved (issue 26: what caps the saving, and b
 For each seed, the babbling session and the mappings of ``bench/id_ablation.py``'s set-up
 (``--setup``, default ``zero_answer``, config.yaml's choice) are rebuilt; the source's
 experience of each star from scratch (the same for every seed: learning from scratch starts at
-rest at the star's centre) is mapped by PA and LPA, and the mapped samples are compared with the
-target's own experience of the star: the median distance of their (q, q̇, q̈) to the nearest
-own sample, in units of the learner's input scale (``id_transfer_headroom.against_own``), and
-sample by sample against the own sample of the same trial and period (both robots track their
-star in the same phase, so these are the true correspondences of the task) the RMS error of
-q, q̇, q̈ and τ over the own data's spread (moving joints). The seed's saving is read from a chapter 5 run directory's results.json (``--run``;
+rest at the star's centre) is mapped by PA and LPA, and the mapped samples are compared with
+the target's own experience of the star: the median distance of their (q, q̇, q̈) to the
+nearest own sample, in units of the learner's input scale
+(``id_transfer_headroom.against_own``), and, against the own sample of the same trial and
+period (both robots track their star in the same phase, so these are the task's true
+correspondences), the RMS error of q, q̇, q̈ and τ over the own data's spread (moving
+joints). The seed's saving is read from a chapter 5 run directory's results.json (``--run``;
 default the final set-up's 10 seeds in process), each seed's curves alone
-(``analysis.per_seed_savings``), and Spearman's rank correlation joins the two over the seeds.
+(``analysis.per_seed_savings``); Spearman's rank correlation joins the two over the seeds.
 
 Usage (repository root, after ``source tools/env.sh``)::
 

@@ -227,8 +227,8 @@ class RobotSimulator:
         bias = np.array(p.calculateInverseDynamics(body, q, qd, self._zero_accel,
                                                    physicsClientId=cid))
         # numpy.linalg.solve's own kernel (LAPACK gesv) for one right-hand side, without its
-        # argument checks: the same bits, a quarter of the time on a 5 x 5 system, and this
-        # runs at every physics step (bench/bench_control_period.py)
+        # argument checks, which cost more than the solve on so small a system: the same
+        # bits, and this runs at every physics step (bench/README.md)
         accel = _umath_linalg.solve1(mass + self._drive,
                                      torques - self.joint_damping * np.asarray(qd) - bias,
                                      signature="dd->d")
