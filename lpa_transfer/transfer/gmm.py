@@ -195,9 +195,7 @@ def mean_log_likelihood(X, weights, means, covariances):
     centre = X.mean(axis=0)
     features = np.ascontiguousarray(quadratic_features(X - centre))
     centred = Responsibilities(weights, means - centre, precisions_chol, np.zeros(X.shape[1]))
-    log_likelihood, _, _, far = _em_kernels.em_sums(
-        features, np.ascontiguousarray(centred.coefficients), centred.constant, _LOG_FLOOR,
-        _EXP_FLOOR, _PRUNE, False)
+    log_likelihood, _, _, far = _compiled_sums(features, centred, _PRUNE, with_sums=False)
     if np.any(far):
         return log_likelihoods(X, weights, means, precisions_chol).mean()
     return log_likelihood / len(X)
@@ -222,17 +220,23 @@ def _em_iteration(X, features, weights, means, precisions_chol, reg_covar, compi
     responsibilities = Responsibilities(weights, means, precisions_chol, np.zeros(dim))
     far = True
     if compiled:
-        features = np.ascontiguousarray(features)
-        coefficients = np.ascontiguousarray(responsibilities.coefficients)
-        log_likelihood, n_k, sums, far = _em_kernels.em_sums(
-            features, coefficients, responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR, _PRUNE)
+        log_likelihood, n_k, sums, far = _compiled_sums(features, responsibilities, _PRUNE)
         if not np.any(far) and n_k.min() < len(X) * np.exp(_PRUNE) / np.finfo(float).eps:
-            log_likelihood, n_k, sums, far = _em_kernels.em_sums(
-                features, coefficients, responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR,
-                _LOG_FLOOR)
+            log_likelihood, n_k, sums, far = _compiled_sums(features, responsibilities,
+                                                            _LOG_FLOOR)
     if np.any(far):
         log_likelihood, n_k, sums = _em_sums_numpy(X, features, responsibilities)
     return _m_step(log_likelihood, n_k, sums, len(X), dim, reg_covar)
+
+
+def _compiled_sums(features, responsibilities, prune, with_sums=True):
+    """:func:`_em_kernels.em_sums` of rows given by their quadratic ``features`` under the
+    mixture of ``responsibilities`` (centred at 0), entries at most ``prune`` below their
+    row's peak left out: (Σ log p(x), n_k, Σ γ features, far rows)."""
+    return _em_kernels.em_sums(np.ascontiguousarray(features),
+                               np.ascontiguousarray(responsibilities.coefficients),
+                               responsibilities.constant, _LOG_FLOOR, _EXP_FLOOR, prune,
+                               with_sums)
 
 
 def _em_sums_numpy(X, features, responsibilities):
