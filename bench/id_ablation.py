@@ -79,6 +79,11 @@ SETUPS = {
     # a diagnostic, not an LWPR variant: the zero answer, and 0 also where only fields the
     # initial data made answer, none of them above w_gen (gate_initial_fields)
     "zero_gated": {"lwpr": {"empty_prediction": "zero"}, "gate": True},
+    # the final set-up (zero answer) with babbling lines spaced like the star legs (minimum
+    # jerk, at rest at every waypoint) instead of at constant speed: §5.4.1 leaves the lines'
+    # time law open, and it decides which accelerations the correspondences hold (factor 4)
+    "zero_mj_babbling": {"lwpr": {"empty_prediction": "zero"},
+                         "babbling_time_law": "minimum_jerk"},
 }
 #: Thesis §5.5.3 (youBot) and the ICRA 2018 paper (Pincher): trials to convergence of learning
 #: from scratch on (Star 1, Star 2) and the time saved by transfer / by random initialisation.
@@ -137,6 +142,8 @@ def set_up(setup, seed, config_path=CONFIG):
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
         config = with_volume(config)
+    if "babbling_time_law" in switches:
+        config["/babbling/*"]["ros__parameters"]["time_law"] = switches["babbling_time_law"]
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]                       # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])

@@ -238,6 +238,29 @@ def test_armature_adds_to_the_joint_space_inertia():
                                rtol=1e-6, atol=1e-9)
 
 
+def test_inverse_dynamics_gives_the_torque_of_a_requested_acceleration():
+    """One physics step of τ = inverse_dynamics(q, q̇, q̈) from a moving state gives q̈ (the
+    drive model: armature, implicit damping, Coriolis and gravity), leaves the state alone,
+    and is refused where it is not the model (position mode, V-REP's velocity motor)."""
+    youbot = load_robot_params(ROBOTS / "youbot_arm.toml")
+    q0, wanted = np.array([0.3, 0.5, 0.8, 0.5, 0.2]), np.array([2.0, -1.5, 3.0, -2.0, 1.0])
+    with RobotSimulator(robot_urdf(youbot), "torque", initial_positions=q0) as sim:
+        start = sim.step([1.0, 20.0, -5.0, 2.0, 0.5], 50)                  # moving
+        qd0 = start.velocities.copy()
+        assert (np.abs(qd0) > 0.01).all()
+        tau = sim.inverse_dynamics(start.positions, qd0, wanted)
+        np.testing.assert_array_equal(sim.state().velocities, qd0)        # untouched
+        assert (np.abs(tau) < youbot.effort_limits).all()                  # not clipped below
+        reached = (sim.step(tau, 1).velocities - qd0) / sim.physics_step
+    np.testing.assert_allclose(reached, wanted, rtol=1e-6, atol=1e-6)
+    with RobotSimulator(robot_urdf(youbot), "position") as sim, \
+            pytest.raises(ValueError, match="torque mode's drive model"):
+        sim.inverse_dynamics(q0, qd0, wanted)
+    with RobotSimulator(robot_urdf(youbot), "torque", actuator="velocity_motor") as sim, \
+            pytest.raises(ValueError, match="velocity_motor"):
+        sim.inverse_dynamics(q0, qd0, wanted)
+
+
 def test_armature_is_read_from_a_urdf_file_and_checked(tmp_path):
     from lpa_transfer.robots.serial_chain import LPA_URDF_NAMESPACE
 

@@ -308,6 +308,25 @@ class RobotSimulator:
         self._steps += n_substeps
         return self.state()
 
+    def inverse_dynamics(self, positions, velocities, accelerations):
+        """Torques (n,) that give the joints ``accelerations`` from ``positions`` and
+        ``velocities`` in one physics step of torque mode with the ``"torque"`` actuator:
+        (M(q) + diag(A + D·dt)) q̈ + h(q, q̇) + D q̇, the drive model of the module docstring
+        (no effort clipping; the simulation's state is not touched). What the robot's own
+        inverse dynamics say a sample's torque should be (issue 26's mapping ceiling)."""
+        if self.control_mode != "torque" or self._motor:
+            raise ValueError("inverse_dynamics is the torque mode's drive model; this "
+                             f"simulator runs {self.control_mode!r} with the {self.actuator!r} "
+                             "actuator")
+        q = self._vector(positions, "positions").tolist()
+        qd = self._vector(velocities, "velocities")
+        qdd = self._vector(accelerations, "accelerations")
+        p, cid, body = self._p, self._client, self._body
+        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
+        bias = np.array(p.calculateInverseDynamics(body, q, qd.tolist(), self._zero_accel,
+                                                   physicsClientId=cid))
+        return (mass + self._drive) @ qdd + bias + self.joint_damping * qd
+
     def state(self):
         """The current :class:`SimState` (read-only arrays)."""
         p, cid = self._p, self._client

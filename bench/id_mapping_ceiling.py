@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""What a better mapping could save on chapter 5 (issue 26: which factor caps the saving, and
+by how much): the final set-up's transfer with parts of the mapped data replaced by the truth.
+
+For each seed the babbling session and the mappings of ``bench/id_ablation.py``'s set-up
+(``zero_answer``, config.yaml's choice) are rebuilt, the source's experience of each star from
+scratch is mapped, and the target learns the star (as transfer-PA does) from initial data in
+which part of what the mapping gave is replaced by the truth:
+
+* ``<M> states, true τ``: the mapped (q, q̇, q̈), with the torques the target's own dynamics
+  give there (``RobotSimulator.inverse_dynamics``): the mapping's torque error removed;
+* ``own states, <M> τ``: the target's own (q, q̇, q̈) of the same trial and period (the
+  task's true correspondences, ``bench/id_seed_accuracy.py``), with the mapped torques: the
+  mapping's state error removed;
+* ``own data``: the target's own experience of the star (both removed: a mapping without
+  error; the same for every seed, learning from scratch being deterministic).
+
+<M> is PA (``--methods``, also LPA). The savings are §5.5.3's (analysis.convergence_table,
+the mean curves, within 10 % of scratch's final error), each condition taking transfer-PA's
+place beside the same seeds' learning from scratch and random initialisation read from the
+final set-up's kept runs (``--kept``); the seed-by-seed saving and its Wilcoxon test against
+random as analysis.per_seed_savings gives them.
+
+Usage (repository root, after ``source tools/env.sh``)::
+
+    python -m bench.id_mapping_ceiling run --seed N [--trials 20] [--out DIR]
+    python -m bench.id_mapping_ceiling report [--out DIR] [--kept DIR]
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from bench.id_ablation import BABBLING_SECONDS, TOLERANCE, load, set_up
+from bench.id_seed_accuracy import experiences
+from bench.id_transfer_headroom import MOVING
+from lpa_transfer.inverse_dynamics.analysis import convergence_table, per_seed_savings
+
+SETUP = "zero_answer"
+KEPT = Path("scenarios/inverse_dynamics/reference_results/twenty_trials_in_process/seeds")
+OUT = Path("runs/id_mapping_ceiling")
+OWN = "own data"
+
+
+def true_torques(robot, rows):
+    """``rows`` (q, q̇, q̈, τ per joint) with τ replaced by the robot's inverse dynamics at
+    their (q, q̇, q̈)."""
+    n = robot.params.n_joints
+    out = np.array(rows, dtype=float)
+    out[:, 3 * n:] = [robot.sim.inverse_dynamics(r[:n], r[n:2 * n], r[2 * n:3 * n]) for r in rows]
+    return out
+
+
+def torque_residual(robot, own):
+    """RMS of (sampled τ - the inverse dynamics' τ at the sample's q, q̇, q̈) over the spread
+    of the sampled τ (moving joints): how far the samples' own relation is from the model
+    (q̈ is a backward difference over the control period, τ the period's command)."""
+    n = robot.params.n_joints
+    moving = own[:, :n].std(axis=0) > MOVING
+    model = true_torques(robot, own)[:, 3 * n:][:, moving]
+    sampled = own[:, 3 * n:][:, moving]
+    return float(np.sqrt(((model - sampled) ** 2).mean()) / sampled.std())
+
+
+def run(seed, n_trials, methods):
+    """{"robot/star/condition": curve (mm per trial)} of the ceiling's conditions for one seed,
+    and {"robot/star": the torque residual of the own data}."""
+    experiment, names, robots, _, models = set_up(SETUP, seed)
+    stars = experiment["stars"]
+    own = experiences(robots, names, stars, n_trials)
+    curves, residuals = {}, {}
+    for star in stars:
+        for target in names:
+            source = next(name for name in names if name != target)
+            robot = robots[star][target]
+            n = robot.params.n_joints
+            residuals[f"{target}/{star}"] = torque_residual(robot, own[target, star])
+            initial = {OWN: own[target, star]}
+            for method in methods:
+                mapped = models[target][method].transfer(own[source, star])
+                initial[f"{method} states, true τ"] = true_torques(robot, mapped)
+                initial[f"own states, {method} τ"] = np.hstack((own[target, star][:, :3 * n],
+                                                                mapped[:, 3 * n:]))
+            for condition, samples in initial.items():
+                errors = robot.trials(robot.learner(samples), n_trials)[0]
+                curves[f"{target}/{star}/{condition}"] = [1e3 * e for e in errors]
+    return curves, residuals
+
+
+def in_place_of_transfer(kept, ours, robot, stars, condition):
+    """Curves (m) in which ``condition``'s runs (from the kept runs or ours) take
+    transfer-PA's place beside the kept learning from scratch and random initialisation."""
+    curves = {}
+    for star in stars:
+        key = f"{robot}/{star}/{condition}"
+        curves[f"{robot}/{star}/transfer-PA"] = np.asarray(kept.get(key, ours.get(key))) / 1e3
+        for name in ("uninitialised", "random"):
+            curves[f"{robot}/{star}/{name}"] = np.asarray(kept[f"{robot}/{star}/{name}"]) / 1e3
+    return curves
+
+
+def report(out, kept_dir):
+    """The ceiling's savings beside the kept runs' scratch, random and transfer, as text."""
+    ours, seeds = load(out, "mapping_ceiling")
+    if not ours:
+        raise SystemExit(f"error: no runs under {out / 'mapping_ceiling'}")
+    kept, kept_seeds = load(kept_dir, SETUP)
+    kept = {k: [v[kept_seeds.index(s)] for s in seeds] for k, v in kept.items()}
+    robots = sorted({k.split("/")[0] for k in ours}, reverse=True)
+    stars = sorted({k.split("/")[1] for k in ours})
+    conditions = ["random", "transfer-PA", "transfer-LPA",
+                  *sorted({k.split("/")[2] for k in ours} - {OWN}), OWN]
+    lines = [f"{len(seeds)} seed(s) {seeds}; time saved by the mean curves (within "
+             f"{100 * TOLERANCE:.0f} % of scratch's final error, {BABBLING_SECONDS} s of "
+             "babbling charged) and seed by seed: median [quartiles], seeds saving more than "
+             "random (Wilcoxon p)", ""]
+    for robot in robots:
+        lines += [f"| {robot} | " + " | ".join(f"{s}: trial 1 (mm), converged" for s in stars)
+                  + " | saved | seed by seed | more than random |", "|---" * (4 + len(stars))
+                  + "|"]
+        scratch = in_place_of_transfer(kept, ours, robot, stars, "random")
+        rows, _ = convergence_table(scratch, [robot], stars, TOLERANCE, BABBLING_SECONDS)
+        lines.append("| uninitialised | " + " | ".join(
+            f"{1e3 * np.mean(scratch[f'{robot}/{s}/uninitialised'], axis=0)[0]:.2f}, {k}"
+            for _, s, c, k, _ in rows if c == "uninitialised") + " | - | - | - |")
+        for condition in conditions:
+            curves = in_place_of_transfer(kept, ours, robot, stars, condition)
+            rows, saved = convergence_table(curves, [robot], stars, TOLERANCE, BABBLING_SECONDS)
+            each, (more, _, n, p) = per_seed_savings(curves, [robot], stars, TOLERANCE,
+                                                     BABBLING_SECONDS)[robot]["transfer-PA"]
+            q1, q2, q3 = np.percentile(100 * each, [25, 50, 75])
+            lines.append(f"| {condition} | " + " | ".join(
+                f"{1e3 * np.mean(curves[f'{robot}/{s}/transfer-PA'], axis=0)[0]:.2f}, {k}"
+                for _, s, c, k, _ in rows if c == "transfer-PA")
+                + f" | {100 * saved[robot]['transfer-PA']:.1f} % | {q2:.1f} % [{q1:.1f}, "
+                f"{q3:.1f}] | " + ("-" if condition == "random" else f"{more} of {n} (p {p:.3f})")
+                + " |")
+        lines.append("")
+    first = next(iter(sorted((out / "mapping_ceiling").glob("seed_*.json"))))
+    lines.append("The own data's sampled τ against the inverse dynamics at their q, q̇, q̈ (RMS "
+                 "over the τ spread): " + ", ".join(
+                     f"{k} {v:.3f}" for k, v in json.loads(first.read_text())
+                     ["torque_residual"].items()))
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    one = sub.add_parser("run")
+    one.add_argument("--seed", type=int, required=True)
+    one.add_argument("--trials", type=int, default=20)
+    one.add_argument("--methods", nargs="+", default=["PA"], choices=["PA", "LPA"])
+    one.add_argument("--out", type=Path, default=OUT)
+    many = sub.add_parser("report")
+    many.add_argument("--out", type=Path, default=OUT)
+    many.add_argument("--kept", type=Path, default=KEPT)
+    args = parser.parse_args(argv)
+    if args.command == "report":
+        print(report(args.out, args.kept))
+        return 0
+    curves, residuals = run(args.seed, args.trials, args.methods)
+    path = args.out / "mapping_ceiling" / f"seed_{args.seed}.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"setup": SETUP, "seed": args.seed, "methods": args.methods,
+                                "curves": curves, "torque_residual": residuals}))
+    print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
