@@ -84,6 +84,9 @@ SETUPS = {
     # time law open, and it decides which accelerations the correspondences hold (factor 4)
     "zero_mj_babbling": {"lwpr": {"empty_prediction": "zero"},
                          "babbling_time_law": "minimum_jerk"},
+    # and with the spline correspondences of factor 4 (§5.4.1 after its ref. [8])
+    "zero_spline_mj": {"lwpr": {"empty_prediction": "zero"}, "interpolation": "spline",
+                       "babbling_time_law": "minimum_jerk"},
 }
 #: Thesis §5.5.3 (youBot) and the ICRA 2018 paper (Pincher): trials to convergence of learning
 #: from scratch on (Star 1, Star 2) and the time saved by transfer / by random initialisation.

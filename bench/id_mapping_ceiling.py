@@ -23,8 +23,11 @@ random as analysis.per_seed_savings gives them.
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m bench.id_mapping_ceiling run --seed N [--trials 20] [--out DIR]
-    python -m bench.id_mapping_ceiling report [--out DIR] [--kept DIR]
+    python -m bench.id_mapping_ceiling run --seed N [--trials 20] [--out DIR] [--parts]
+    python -m bench.id_mapping_ceiling report [--out DIR] [--kept DIR] [--parts]
+
+``--parts`` runs, kept apart, which of the mapped state's parts keeps the saving down:
+``<M> q, own q̇ q̈, true τ`` and ``<M> q q̇, own q̈, true τ``.
 """
 import argparse
 import json
@@ -42,6 +45,8 @@ SETUP = "zero_answer"
 KEPT = Path("scenarios/inverse_dynamics/reference_results/twenty_trials_in_process/seeds")
 OUT = Path("runs/id_mapping_ceiling")
 OWN = "own data"
+#: the runs' directory under --out: the ceiling's conditions, or --parts'
+NAMES = {False: "mapping_ceiling", True: "mapping_ceiling_parts"}
 
 
 def true_torques(robot, rows):
@@ -64,9 +69,34 @@ def torque_residual(robot, own):
     return float(np.sqrt(((model - sampled) ** 2).mean()) / sampled.std())
 
 
-def run(seed, n_trials, methods):
-    """{"robot/star/condition": curve (mm per trial)} of the ceiling's conditions for one seed,
-    and {"robot/star": the torque residual of the own data}."""
+#: The state parts of a sample (columns q, q̇, q̈ per joint, then τ).
+PARTS = ("q", "q̇", "q̈")
+#: name (with <M> for the method) -> (the state parts the mapping gives, the rest the own
+#: data's; the torques: "true" at the composed state, or the mapping's)
+CEILING = {"<M> states, true τ": (PARTS, "true"), "own states, <M> τ": ((), "mapped")}
+#: ``--parts``: which mapped state part keeps the saving down
+PARTS_CONDITIONS = {"<M> q, own q̇ q̈, true τ": (("q",), "true"),
+                    "<M> q q̇, own q̈, true τ": (("q", "q̇"), "true")}
+
+
+def composed(robot, own, mapped, parts, torques):
+    """Samples with the state ``parts`` from ``mapped`` and the others from ``own`` (the
+    same trial and period: the task's true correspondences), and the mapping's torques or
+    the true ones at the composed state."""
+    n = robot.params.n_joints
+    rows = np.array(own, dtype=float)
+    for k, part in enumerate(PARTS):
+        if part in parts:
+            rows[:, k * n:(k + 1) * n] = mapped[:, k * n:(k + 1) * n]
+    if torques == "mapped":
+        rows[:, 3 * n:] = mapped[:, 3 * n:]
+        return rows
+    return true_torques(robot, rows)
+
+
+def run(seed, n_trials, methods, conditions=CEILING):
+    """{"robot/star/condition": curve (mm per trial)} of the ceiling's ``conditions`` and the
+    own data for one seed, and {"robot/star": the torque residual of the own data}."""
     experiment, names, robots, _, models = set_up(SETUP, seed)
     stars = experiment["stars"]
     own = experiences(robots, names, stars, n_trials)
@@ -75,14 +105,13 @@ def run(seed, n_trials, methods):
         for target in names:
             source = next(name for name in names if name != target)
             robot = robots[star][target]
-            n = robot.params.n_joints
             residuals[f"{target}/{star}"] = torque_residual(robot, own[target, star])
             initial = {OWN: own[target, star]}
             for method in methods:
                 mapped = models[target][method].transfer(own[source, star])
-                initial[f"{method} states, true τ"] = true_torques(robot, mapped)
-                initial[f"own states, {method} τ"] = np.hstack((own[target, star][:, :3 * n],
-                                                                mapped[:, 3 * n:]))
+                for name, (parts, torques) in conditions.items():
+                    initial[name.replace("<M>", method)] = composed(robot, own[target, star],
+                                                                    mapped, parts, torques)
             for condition, samples in initial.items():
                 errors = robot.trials(robot.learner(samples), n_trials)[0]
                 curves[f"{target}/{star}/{condition}"] = [1e3 * e for e in errors]
@@ -101,11 +130,11 @@ def in_place_of_transfer(kept, ours, robot, stars, condition):
     return curves
 
 
-def report(out, kept_dir):
+def report(out, kept_dir, name=NAMES[False]):
     """The ceiling's savings beside the kept runs' scratch, random and transfer, as text."""
-    ours, seeds = load(out, "mapping_ceiling")
+    ours, seeds = load(out, name)
     if not ours:
-        raise SystemExit(f"error: no runs under {out / 'mapping_ceiling'}")
+        raise SystemExit(f"error: no runs under {out / name}")
     kept, kept_seeds = load(kept_dir, SETUP)
     kept = {k: [v[kept_seeds.index(s)] for s in seeds] for k, v in kept.items()}
     robots = sorted({k.split("/")[0] for k in ours}, reverse=True)
@@ -138,7 +167,7 @@ def report(out, kept_dir):
                 f"{q3:.1f}] | " + ("-" if condition == "random" else f"{more} of {n} (p {p:.3f})")
                 + " |")
         lines.append("")
-    first = next(iter(sorted((out / "mapping_ceiling").glob("seed_*.json"))))
+    first = next(iter(sorted((out / name).glob("seed_*.json"))))
     lines.append("The own data's sampled τ against the inverse dynamics at their q, q̇, q̈ (RMS "
                  "over the τ spread): " + ", ".join(
                      f"{k} {v:.3f}" for k, v in json.loads(first.read_text())
@@ -154,15 +183,19 @@ def main(argv=None):
     one.add_argument("--trials", type=int, default=20)
     one.add_argument("--methods", nargs="+", default=["PA"], choices=["PA", "LPA"])
     one.add_argument("--out", type=Path, default=OUT)
+    one.add_argument("--parts", action="store_true",
+                     help=f"run {', '.join(PARTS_CONDITIONS)} instead (kept apart)")
     many = sub.add_parser("report")
     many.add_argument("--out", type=Path, default=OUT)
     many.add_argument("--kept", type=Path, default=KEPT)
+    many.add_argument("--parts", action="store_true", help="report the --parts runs")
     args = parser.parse_args(argv)
     if args.command == "report":
-        print(report(args.out, args.kept))
+        print(report(args.out, args.kept, NAMES[args.parts]))
         return 0
-    curves, residuals = run(args.seed, args.trials, args.methods)
-    path = args.out / "mapping_ceiling" / f"seed_{args.seed}.json"
+    curves, residuals = run(args.seed, args.trials, args.methods,
+                            PARTS_CONDITIONS if args.parts else CEILING)
+    path = args.out / NAMES[args.parts] / f"seed_{args.seed}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"setup": SETUP, "seed": args.seed, "methods": args.methods,
                                 "curves": curves, "torque_residual": residuals}))
