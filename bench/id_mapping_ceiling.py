@@ -130,6 +130,13 @@ def in_place_of_transfer(kept, ours, robot, stars, condition):
     return curves
 
 
+def cells(curves, rows, robot, condition):
+    """Per star of a report row: ``condition``'s mean first trial (mm) and its trials to
+    convergence (``rows`` of analysis.convergence_table)."""
+    return " | ".join(f"{1e3 * np.mean(curves[f'{robot}/{s}/{condition}'], axis=0)[0]:.2f}, {k}"
+                      for _, s, c, k, _ in rows if c == condition)
+
+
 def report(out, kept_dir, name=NAMES[False]):
     """The ceiling's savings beside the kept runs' scratch, random and transfer, as text."""
     ours, seeds = load(out, name)
@@ -149,23 +156,19 @@ def report(out, kept_dir, name=NAMES[False]):
         lines += [f"| {robot} | " + " | ".join(f"{s}: trial 1 (mm), converged" for s in stars)
                   + " | saved | seed by seed | more than random |", "|---" * (4 + len(stars))
                   + "|"]
-        scratch = in_place_of_transfer(kept, ours, robot, stars, "random")
-        rows, _ = convergence_table(scratch, [robot], stars, TOLERANCE, BABBLING_SECONDS)
-        lines.append("| uninitialised | " + " | ".join(
-            f"{1e3 * np.mean(scratch[f'{robot}/{s}/uninitialised'], axis=0)[0]:.2f}, {k}"
-            for _, s, c, k, _ in rows if c == "uninitialised") + " | - | - | - |")
         for condition in conditions:
             curves = in_place_of_transfer(kept, ours, robot, stars, condition)
             rows, saved = convergence_table(curves, [robot], stars, TOLERANCE, BABBLING_SECONDS)
+            if condition == conditions[0]:     # learning from scratch, the same in every table
+                lines.append(f"| uninitialised | {cells(curves, rows, robot, 'uninitialised')}"
+                             " | - | - | - |")
             each, (more, _, n, p) = per_seed_savings(curves, [robot], stars, TOLERANCE,
                                                      BABBLING_SECONDS)[robot]["transfer-PA"]
             q1, q2, q3 = np.percentile(100 * each, [25, 50, 75])
-            lines.append(f"| {condition} | " + " | ".join(
-                f"{1e3 * np.mean(curves[f'{robot}/{s}/transfer-PA'], axis=0)[0]:.2f}, {k}"
-                for _, s, c, k, _ in rows if c == "transfer-PA")
-                + f" | {100 * saved[robot]['transfer-PA']:.1f} % | {q2:.1f} % [{q1:.1f}, "
-                f"{q3:.1f}] | " + ("-" if condition == "random" else f"{more} of {n} (p {p:.3f})")
-                + " |")
+            lines.append(f"| {condition} | {cells(curves, rows, robot, 'transfer-PA')}"
+                         f" | {100 * saved[robot]['transfer-PA']:.1f} % | {q2:.1f} % [{q1:.1f}, "
+                         f"{q3:.1f}] | " + ("-" if condition == "random" else
+                                            f"{more} of {n} (p {p:.3f})") + " |")
         lines.append("")
     first = next(iter(sorted((out / name).glob("seed_*.json"))))
     lines.append("The own data's sampled τ against the inverse dynamics at their q, q̇, q̈ (RMS "

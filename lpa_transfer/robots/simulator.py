@@ -223,9 +223,7 @@ class RobotSimulator:
         p, cid, body = self._p, self._client, self._body
         states = p.getJointStates(body, self._joints, physicsClientId=cid)
         q, qd = [s[0] for s in states], [s[1] for s in states]
-        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
-        bias = np.array(p.calculateInverseDynamics(body, q, qd, self._zero_accel,
-                                                   physicsClientId=cid))
+        mass, bias = self._mass_and_bias(q, qd)
         # numpy.linalg.solve's own kernel (LAPACK gesv) for one right-hand side, without its
         # argument checks, which cost more than the solve on so small a system: the same
         # bits, and this runs at every physics step (bench/README.md)
@@ -233,6 +231,15 @@ class RobotSimulator:
                                      torques - self.joint_damping * np.asarray(qd) - bias,
                                      signature="dd->d")
         return mass @ accel + bias
+
+    def _mass_and_bias(self, q, qd):
+        """M(q) and h(q, q̇) = Coriolis + gravity of the URDF's rigid bodies (lists in, arrays
+        out): the drive model's pybullet part, shared by the drive and inverse_dynamics."""
+        p, cid, body = self._p, self._client, self._body
+        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
+        bias = np.array(p.calculateInverseDynamics(body, q, qd, self._zero_accel,
+                                                   physicsClientId=cid))
+        return mass, bias
 
     @property
     def n_joints(self):
@@ -318,13 +325,10 @@ class RobotSimulator:
             raise ValueError("inverse_dynamics is the torque mode's drive model; this "
                              f"simulator runs {self.control_mode!r} with the {self.actuator!r} "
                              "actuator")
-        q = self._vector(positions, "positions").tolist()
         qd = self._vector(velocities, "velocities")
         qdd = self._vector(accelerations, "accelerations")
-        p, cid, body = self._p, self._client, self._body
-        mass = np.array(p.calculateMassMatrix(body, q, physicsClientId=cid))
-        bias = np.array(p.calculateInverseDynamics(body, q, qd.tolist(), self._zero_accel,
-                                                   physicsClientId=cid))
+        mass, bias = self._mass_and_bias(self._vector(positions, "positions").tolist(),
+                                         qd.tolist())
         return (mass + self._drive) @ qdd + bias + self.joint_damping * qd
 
     def state(self):
