@@ -145,8 +145,10 @@ def set_up(setup, seed, config_path=CONFIG):
     config = yaml.safe_load(Path(config_path).read_text())
     if switches.get("volume"):
         config = with_volume(config)
-    if "babbling_time_law" in switches:
-        config["/babbling/*"]["ros__parameters"]["time_law"] = switches["babbling_time_law"]
+    # each set-up names its babbling time law (absent: constant speed, the references'), so
+    # that it means the same whatever config.yaml has since chosen
+    config["/babbling/*"]["ros__parameters"]["time_law"] = switches.get("babbling_time_law",
+                                                                       "linear")
     experiment = config["experiment"]["ros__parameters"]
     names = experiment["robots"]                       # names[0] is the babbling's source
     fit = dict(latent_dim=experiment["latent_dim"])

@@ -15,7 +15,8 @@ pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 
 
 def test_spline_interpolation_puts_the_transferred_data_on_the_task(tmp_path):
-    """interpolation: spline (§5.4.1) over the graph at the smoke size, with the nearest-field
+    """interpolation: spline (§5.4.1) alone (babbling lines at constant speed, as
+    sampled_lines.yaml) over the graph at the smoke size, with the nearest-field
     answer (nearest_answer.yaml: the youBot's learner then uses whatever data it got, so the
     trial-1 error shows where they lie): the pairs and the Pincher's experience read off
     splines start the youBot's transfer-PA far lower than the raw samples do (measured trial
@@ -23,7 +24,8 @@ def test_spline_interpolation_puts_the_transferred_data_on_the_task(tmp_path):
     curves = {}
     for interpolation in ("none", "spline"):
         override = tmp_path / f"{interpolation}.yaml"
-        override.write_text("experiment:\n  ros__parameters:\n    targets: [youbot]\n"
+        override.write_text("/babbling/*:\n  ros__parameters:\n    time_law: linear\n"
+                            "experiment:\n  ros__parameters:\n    targets: [youbot]\n"
                             "    conditions: [transfer-PA]\n"
                             f"    interpolation: {interpolation}\n")
         out = tmp_path / interpolation
