@@ -65,13 +65,13 @@ def test_every_condition_learns_on_both_robots(smoke_run):
         # LWPR answers 0 where no receptive field is active (config.yaml, as the LWPR package),
         # so data that activate no field on the task leave the PID alone. At this size (3
         # babbling lines, 2 source trials) the PA-mapped experience reaches the task: trial 1
-        # measured over the graph, youBot scratch 18.63, transfer-PA 12.96, own+transfer-PA
-        # 12.60 mm; Pincher 20.48, 16.73, 15.41 mm (ratios 0.68-0.82)
+        # measured over the graph, youBot scratch 18.63, transfer-PA 15.90, own+transfer-PA
+        # 15.55 mm; Pincher 20.48, 13.68, 12.68 mm (ratios 0.62-0.85)
         for condition in ("transfer-PA", "own+transfer-PA"):
             assert curves[f"{robot}/star1/{condition}"][0][0] < 0.9 * scratch[0], condition
-        # the own babbling and LPA's data (n_min 20 on 180 pairs) barely activate a field
-        # there: random 17.43 / 20.17, transfer-LPA 18.15 / 20.48, own+transfer-LPA 17.53 /
-        # 21.51 mm (ratios 0.94-1.05); none may start far worse than nothing
+        # the own babbling and LPA's data (n_min 20 on 180 pairs) activate fewer fields there:
+        # random 18.57 / 19.52, transfer-LPA 13.79 / 19.91, own+transfer-LPA 13.68 / 18.80 mm
+        # (ratios 0.73-1.00); none may start far worse than nothing
         for condition in ("random", "transfer-LPA", "own+transfer-LPA"):
             assert curves[f"{robot}/star1/{condition}"][0][0] < 1.15 * scratch[0], condition
     with open(smoke_run / "learning_curves.csv") as handle:
@@ -98,12 +98,14 @@ def test_outputs_and_bag(smoke_run):
         assert str(pairs["meta_residual_unit"]) == "s" and float(pairs["meta_worst_residual"]) == 0
         assert int(pairs["meta_pairs_dropped"]) == 0
         source_q = pairs["source"][:, :5]
-    # babbled in the vicinity of Star 1: the youBot's box is ±0.15 m around the star's centre
-    # (PID tracking lags, so allow 3 cm)
+    # babbled in the vicinity of Star 1: the youBot's box is ±0.15 m around the star's centre;
+    # the PID alone tracks the lines, and on config.yaml's minimum-jerk lines (peak speed 1.875
+    # times the constant speed's) it overshoots their ends: measured up to 8.4 cm past the box
+    # here (constant-speed lines: under 3 cm), so allow 10 cm
     youbot = load_robot_params(ROOT / "scenarios" / "robots" / "youbot_arm.toml")
     centre = forward_kinematics(youbot, np.array([[0.0, 0.0, 1.2, 0.8, 0.0]]))[0]
     offsets = np.abs(forward_kinematics(youbot, source_q) - centre)
-    assert offsets[:, :2].max() < 0.18 and offsets[:, :2].max() > 0.05
+    assert offsets[:, :2].max() < 0.25 and offsets[:, :2].max() > 0.05
     models = sorted(p.name for p in (smoke_run / "models").iterdir())
     assert len(models) == 4
 
