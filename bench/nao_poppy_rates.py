@@ -22,6 +22,8 @@ transferred sample, an accurate one (error within the threshold), and one of scr
 samples after ``total`` s. ``--mixing`` prints how the k-NN inverse model mixes
 transferred and own samples at the end (:func:`mixing`), ``--guard`` what the guard retires
 and what LPA behind it would reach with accurate samples only (:func:`guard`).
+``--unshared-noise K`` the final rates when every condition, scratch too, explores the joints
+Nao lacks with K times the exploration noise (:func:`unshared_noise`).
 """
 import argparse
 import os
@@ -281,6 +283,47 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     return figures
 
 
+class ScaledNoise:
+    """A babbler's exploration noise E_t (goal_babbling.ExplorationNoise) scaled joint by
+    joint: diag(scale) E_t(x), the same random walk."""
+
+    def __init__(self, noise, scale):
+        self.noise, self.scale = noise, np.asarray(scale, dtype=np.float64)
+
+    def __call__(self, x):
+        return self.scale * self.noise(x)
+
+    def step(self):
+        self.noise.step()
+
+
+def unshared_noise(rate, seed, factor, total=5000.0, guided=600.0):
+    """Whether more exploration of the joints Nao lacks (Poppy's torso, held at home by the
+    guided phase and by every transferred sample) after T_guided closes the gap to scratch
+    (issue 27; §6.5.2: Poppy "continues exploring utilizing all the motors available", with
+    no noise given): the final rates of scratch, guided only, LPA behind the guard and LPA,
+    each exploring those joints with ``factor`` times the noise."""
+    setup = prepare(rate, seed, total, guided)
+    target = setup.arms["target"]
+    scale = np.ones(len(setup.home))
+    scale[unshared_joints(setup)] = factor
+
+    def final_rate(model):
+        return evaluate_reaching(model.inverse, target, setup.points, setup.threshold).rate
+
+    scratch = setup.babbler("target", 1).start(target)
+    scratch.noise_ = ScaledNoise(scratch.noise_, scale)
+    scratch.run_for(total)
+    figures = {"scratch": final_rate(scratch.model_)}
+    for condition in ("guided only", "LPA-guarded", "LPA"):
+        model = model_after_guided(setup, condition)
+        babbling = setup.babbler("target", 3).start(target, model)
+        babbling.noise_ = ScaledNoise(babbling.noise_, scale)
+        babbling.run_for(total - guided)
+        figures[condition] = final_rate(model)
+    return figures
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 3.0, 4.0, 10.0])
@@ -289,10 +332,14 @@ def main():
     parser.add_argument("--accuracy", action="store_true")
     parser.add_argument("--mixing", action="store_true")
     parser.add_argument("--guard", action="store_true")
+    parser.add_argument("--unshared-noise", type=float, metavar="K")
     args = parser.parse_args()
     CONFIG_FILES.extend(args.override)
     diagnosis = accuracy if args.accuracy else mixing if args.mixing else \
         guard if args.guard else None
+    if args.unshared_noise is not None:
+        def diagnosis(rate, seed):
+            return unshared_noise(rate, seed, args.unshared_noise)
     if diagnosis:
         for rate in args.rates:
             for seed in args.seeds:
