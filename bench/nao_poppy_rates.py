@@ -139,19 +139,49 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
     return curves
 
 
-def from_scratch(setup, total):
+class ScaledNoise:
+    """A babbler's exploration noise E_t (goal_babbling.ExplorationNoise) scaled joint by
+    joint: diag(scale) E_t(x), the same random walk."""
+
+    def __init__(self, noise, scale):
+        self.noise, self.scale = noise, np.asarray(scale, dtype=np.float64)
+
+    def __call__(self, x):
+        return self.scale * self.noise(x)
+
+    def step(self):
+        self.noise.step()
+
+
+def scaled(babbling, noise_scale):
+    """``babbling`` (started), its noise scaled joint by joint by ``noise_scale`` (None: as
+    it is)."""
+    if noise_scale is not None:
+        babbling.noise_ = ScaledNoise(babbling.noise_, noise_scale)
+    return babbling
+
+
+def from_scratch(setup, total, noise_scale=None):
     """The target goal-babbling from scratch for ``total`` s (its babbling seed, as run's
-    "scratch"): (the babbler, its observed task points)."""
-    scratch = setup.babbler("target", 1).start(setup.arms["target"])
+    "scratch"): (the babbler, its observed task points); ``noise_scale`` as :func:`scaled`."""
+    scratch = scaled(setup.babbler("target", 1).start(setup.arms["target"]), noise_scale)
     _, points = scratch.run_for(total)
     return scratch, points
 
 
-def after_guided(setup, model, total, guided):
+def after_guided(setup, model, total, guided, noise_scale=None):
     """``model`` (:func:`model_after_guided`) as the target babbles on from T_guided to
-    ``total`` with the after-transfer babbling seed, as run's conditions; returns it."""
-    setup.babbler("target", 3).start(setup.arms["target"], model).run_for(total - guided)
+    ``total`` with the after-transfer babbling seed, as run's conditions (``noise_scale`` as
+    :func:`scaled`); returns it."""
+    scaled(setup.babbler("target", 3).start(setup.arms["target"], model),
+           noise_scale).run_for(total - guided)
     return model
+
+
+def final_rate(setup, model):
+    """The reaching rate of ``model``'s inverse on the target's test points."""
+    return evaluate_reaching(model.inverse, setup.arms["target"], setup.points,
+                             setup.threshold).rate
 
 
 def unshared_joints(setup):
@@ -245,12 +275,9 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     move the joints Nao does not have (Poppy's torso; every transferred sample holds it at
     home)."""
     setup = prepare(rate, seed, total, guided)
-    target, points, threshold = setup.arms["target"], setup.points, setup.threshold
+    target = setup.arms["target"]
     errors = transfer_errors(setup)
-    bad = errors > threshold
-
-    def final_rate(model):
-        return evaluate_reaching(model.inverse, target, points, threshold).rate
+    bad = errors > setup.threshold
 
     def babbled(model):
         return after_guided(setup, model, total, guided)
@@ -261,15 +288,15 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     accurate = SimpleNamespace(**vars(setup))
     accurate.commands, accurate.task_points = setup.commands[~bad], setup.task_points[~bad]
     figures = {"transferred / past the threshold": (len(errors), int(bad.sum())),
-               "final rate: scratch": final_rate(scratch.model_),
-               "guided only": final_rate(guided_only),
-               "LPA-guarded": final_rate(guarded),
-               "its own samples alone": final_rate(guarded.model),
+               "final rate: scratch": final_rate(setup, scratch.model_),
+               "guided only": final_rate(setup, guided_only),
+               "LPA-guarded": final_rate(setup, guarded),
+               "its own samples alone": final_rate(setup, guarded.model),
                "LPA-guarded, accurate samples only": final_rate(
-                   babbled(model_after_guided(accurate, "LPA-guarded")))}
+                   setup, babbled(model_after_guided(accurate, "LPA-guarded")))}
     exact = SimpleNamespace(**vars(setup))
     exact.task_points = np.asarray(target.forward(setup.commands))
-    figures["exact transfer"] = final_rate(babbled(model_after_guided(exact, "LPA")))
+    figures["exact transfer"] = final_rate(setup, babbled(model_after_guided(exact, "LPA")))
     unshared = unshared_joints(setup)
     figures["std of the unshared joints over the own samples: scratch / guided only / "
             "LPA-guarded (rad)"] = tuple(
@@ -283,20 +310,6 @@ def guard(rate, seed, total=5000.0, guided=600.0):
     return figures
 
 
-class ScaledNoise:
-    """A babbler's exploration noise E_t (goal_babbling.ExplorationNoise) scaled joint by
-    joint: diag(scale) E_t(x), the same random walk."""
-
-    def __init__(self, noise, scale):
-        self.noise, self.scale = noise, np.asarray(scale, dtype=np.float64)
-
-    def __call__(self, x):
-        return self.scale * self.noise(x)
-
-    def step(self):
-        self.noise.step()
-
-
 def unshared_noise(rate, seed, factor, total=5000.0, guided=600.0):
     """Whether more exploration of the joints Nao lacks (Poppy's torso, held at home by the
     guided phase and by every transferred sample) after T_guided closes the gap to scratch
@@ -304,24 +317,15 @@ def unshared_noise(rate, seed, factor, total=5000.0, guided=600.0):
     no noise given): the final rates of scratch, guided only, LPA behind the guard and LPA,
     each exploring those joints with ``factor`` times the noise."""
     setup = prepare(rate, seed, total, guided)
-    target = setup.arms["target"]
     scale = np.ones(len(setup.home))
     scale[unshared_joints(setup)] = factor
-
-    def final_rate(model):
-        return evaluate_reaching(model.inverse, target, setup.points, setup.threshold).rate
-
-    scratch = setup.babbler("target", 1).start(target)
-    scratch.noise_ = ScaledNoise(scratch.noise_, scale)
-    scratch.run_for(total)
-    figures = {"scratch": final_rate(scratch.model_)}
+    scratch, _ = from_scratch(setup, total, scale)
+    figures = {"scratch": final_rate(setup, scratch.model_)}
     for condition in ("guided only", "LPA-guarded", "LPA"):
-        model = model_after_guided(setup, condition)
-        babbling = setup.babbler("target", 3).start(target, model)
-        babbling.noise_ = ScaledNoise(babbling.noise_, scale)
-        babbling.run_for(total - guided)
-        figures[condition] = final_rate(model)
+        figures[condition] = final_rate(setup, after_guided(
+            setup, model_after_guided(setup, condition), total, guided, scale))
     return figures
+
 
 
 def main():
