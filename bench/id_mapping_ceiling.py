@@ -2,8 +2,9 @@
 """What a better mapping could save on chapter 5 (issue 26: which factor caps the saving, and
 by how much): the final set-up's transfer with parts of the mapped data replaced by the truth.
 
-For each seed the babbling session and the mappings of ``bench/id_ablation.py``'s set-up
-(``zero_answer``, config.yaml's choice) are rebuilt, the source's experience of each star from
+For each seed the babbling session and the mappings of a set-up of ``bench/id_ablation.py``
+(``--setup``: ``zero_answer``, the twenty-trial references' choice, or ``zero_spline_mj``,
+config.yaml's final one) are rebuilt, the source's experience of each star from
 scratch is mapped, and the target learns the star (as transfer-PA does) from initial data in
 which part of what the mapping gave is replaced by the truth:
 
@@ -18,12 +19,12 @@ which part of what the mapping gave is replaced by the truth:
 <M> is PA (``--methods``, also LPA). The savings are §5.5.3's (analysis.convergence_table,
 the mean curves, within 10 % of scratch's final error), each condition taking transfer-PA's
 place beside the same seeds' learning from scratch and random initialisation read from the
-final set-up's kept runs (``--kept``); the seed-by-seed saving and its Wilcoxon test against
+same set-up's kept runs (``--kept``); the seed-by-seed saving and its Wilcoxon test against
 random as analysis.per_seed_savings gives them.
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m bench.id_mapping_ceiling run --seed N [--trials 20] [--out DIR] [--parts]
+    python -m bench.id_mapping_ceiling run --seed N [--setup S] [--trials 20] [--out DIR] [--parts]
     python -m bench.id_mapping_ceiling report [--out DIR] [--kept DIR] [--parts]
 
 ``--parts`` runs, kept apart, which of the mapped state's parts keeps the saving down:
@@ -36,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.id_ablation import BABBLING_SECONDS, TOLERANCE, load, set_up
+from bench.id_ablation import BABBLING_SECONDS, SETUPS, TOLERANCE, load, set_up
 from bench.id_seed_accuracy import experiences
 from bench.id_transfer_headroom import MOVING
 from lpa_transfer.inverse_dynamics.analysis import convergence_table, per_seed_savings
@@ -94,10 +95,11 @@ def composed(robot, own, mapped, parts, torques):
     return true_torques(robot, rows)
 
 
-def run(seed, n_trials, methods, conditions=CEILING):
+def run(seed, n_trials, methods, conditions=CEILING, setup=SETUP):
     """{"robot/star/condition": curve (mm per trial)} of the ceiling's ``conditions`` and the
-    own data for one seed, and {"robot/star": the torque residual of the own data}."""
-    experiment, names, robots, _, models = set_up(SETUP, seed)
+    own data for one seed of ``setup``, and {"robot/star": the torque residual of the own
+    data}."""
+    experiment, names, robots, _, models = set_up(setup, seed)
     stars = experiment["stars"]
     own = experiences(robots, names, stars, n_trials)
     curves, residuals = {}, {}
@@ -142,13 +144,17 @@ def report(out, kept_dir, name=NAMES[False]):
     ours, seeds = load(out, name)
     if not ours:
         raise SystemExit(f"error: no runs under {out / name}")
-    kept, kept_seeds = load(kept_dir, SETUP)
+    first = json.loads(next(iter(sorted((out / name).glob("seed_*.json")))).read_text())
+    setup = first.get("setup", SETUP)
+    kept, kept_seeds = load(kept_dir, setup)
+    if missing := sorted(set(seeds) - set(kept_seeds)):
+        raise SystemExit(f"error: {kept_dir / setup} lacks the kept runs of seeds {missing}")
     kept = {k: [v[kept_seeds.index(s)] for s in seeds] for k, v in kept.items()}
     robots = sorted({k.split("/")[0] for k in ours}, reverse=True)
     stars = sorted({k.split("/")[1] for k in ours})
     conditions = ["random", "transfer-PA", "transfer-LPA",
                   *sorted({k.split("/")[2] for k in ours} - {OWN}), OWN]
-    lines = [f"{len(seeds)} seed(s) {seeds}; time saved by the mean curves (within "
+    lines = [f"set-up {setup}, {len(seeds)} seed(s) {seeds}; time saved by the mean curves (within "
              f"{100 * TOLERANCE:.0f} % of scratch's final error, {BABBLING_SECONDS} s of "
              "babbling charged) and seed by seed: median [quartiles], seeds saving more than "
              "random (Wilcoxon p)", ""]
@@ -170,11 +176,9 @@ def report(out, kept_dir, name=NAMES[False]):
                          f"{q3:.1f}] | " + ("-" if condition == "random" else
                                             f"{more} of {n} (p {p:.3f})") + " |")
         lines.append("")
-    first = next(iter(sorted((out / name).glob("seed_*.json"))))
     lines.append("The own data's sampled τ against the inverse dynamics at their q, q̇, q̈ (RMS "
                  "over the τ spread): " + ", ".join(
-                     f"{k} {v:.3f}" for k, v in json.loads(first.read_text())
-                     ["torque_residual"].items()))
+                     f"{k} {v:.3f}" for k, v in first["torque_residual"].items()))
     return "\n".join(lines)
 
 
@@ -183,6 +187,7 @@ def main(argv=None):
     sub = parser.add_subparsers(dest="command", required=True)
     one = sub.add_parser("run")
     one.add_argument("--seed", type=int, required=True)
+    one.add_argument("--setup", choices=sorted(SETUPS), default=SETUP)
     one.add_argument("--trials", type=int, default=20)
     one.add_argument("--methods", nargs="+", default=["PA"], choices=["PA", "LPA"])
     one.add_argument("--out", type=Path, default=OUT)
@@ -196,11 +201,15 @@ def main(argv=None):
     if args.command == "report":
         print(report(args.out, args.kept, NAMES[args.parts]))
         return 0
-    curves, residuals = run(args.seed, args.trials, args.methods,
-                            PARTS_CONDITIONS if args.parts else CEILING)
     path = args.out / NAMES[args.parts] / f"seed_{args.seed}.json"
+    for other in path.parent.glob("seed_*.json"):
+        if (found := json.loads(other.read_text()).get("setup", SETUP)) != args.setup:
+            raise SystemExit(f"error: {other} is of set-up {found}; give another --out for "
+                             f"{args.setup}")
+    curves, residuals = run(args.seed, args.trials, args.methods,
+                            PARTS_CONDITIONS if args.parts else CEILING, args.setup)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"setup": SETUP, "seed": args.seed, "methods": args.methods,
+    path.write_text(json.dumps({"setup": args.setup, "seed": args.seed, "methods": args.methods,
                                 "curves": curves, "torque_residual": residuals}))
     print(f"wrote {path}", file=sys.stderr)
     return 0
