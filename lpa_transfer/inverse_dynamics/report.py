@@ -12,7 +12,7 @@ from types import SimpleNamespace
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.ticker import LogFormatter, ScalarFormatter
+from matplotlib.ticker import LogFormatter, MaxNLocator, ScalarFormatter
 
 from lpa_transfer.inverse_dynamics.analysis import (PLATEAU_WINDOW, TRIAL_SECONDS,
                                                     bootstrap_savings,
@@ -160,6 +160,7 @@ def plot_curves(curves, experiment, path):
                                             f"of scratch's final")
             ax.set(title=f"{robot} learning {star}", xlabel="trial",
                    ylabel="tracking error (mm, log scale)", yscale="log")
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))   # trial 1, 2, ..., not 2.5
             ax.yaxis.set_major_formatter(ScalarFormatter())   # 2, 3, 5 mm, not 2×10⁰
             # minor ticks labelled as plain numbers, a subset of them above half a decade
             ax.yaxis.set_minor_formatter(LogFormatter(labelOnlyBase=False,
