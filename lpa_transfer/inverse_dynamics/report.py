@@ -168,9 +168,11 @@ def plot_curves(curves, experiment, path):
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
     # one star's panel is too narrow for the title on one line
-    fig.suptitle(f"Thesis Fig. 5-7/5-8: mean ± std over {len(experiment.done_seeds)} seed(s),"
-                 + ("\n" if len(experiment.stars) < 2 else " ")
-                 + "the band at most down to the lowest seed (a trial is 8.4 s)")
+    n_seeds = len(experiment.done_seeds)
+    fig.suptitle("Thesis Fig. 5-7/5-8: " + (
+        "one seed (a trial is 8.4 s)" if n_seeds == 1 else
+        f"mean ± std over {n_seeds} seeds," + ("\n" if len(experiment.stars) < 2 else " ")
+        + "the band at most down to the lowest seed (a trial is 8.4 s)"))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
