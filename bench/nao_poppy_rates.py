@@ -27,6 +27,7 @@ Nao lacks with K times the exploration noise (:func:`unshared_noise`).
 """
 import argparse
 import os
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -327,7 +328,6 @@ def unshared_noise(rate, seed, factor, total=5000.0, guided=600.0):
     return figures
 
 
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rates", type=float, nargs="+", default=[2.0, 3.0, 4.0, 10.0])
@@ -342,8 +342,7 @@ def main():
     diagnosis = accuracy if args.accuracy else mixing if args.mixing else \
         guard if args.guard else None
     if args.unshared_noise is not None:
-        def diagnosis(rate, seed):
-            return unshared_noise(rate, seed, args.unshared_noise)
+        diagnosis = partial(unshared_noise, factor=args.unshared_noise)
     if diagnosis:
         for rate in args.rates:
             for seed in args.seeds:
