@@ -83,8 +83,15 @@ def _default_sigint():
 def test_ctrl_c_leaves_a_finalised_bag_and_the_pairs_so_far(tmp_path):
     """SIGINT to the script's process group (what Ctrl-C in a terminal sends) mid-collection."""
     out = tmp_path / "run"
+    # this test's listener is a third subscriber of /correspondences: without counting it the
+    # collector's wait for 2 (the recorder and lpa_mapping) can end before a slow recorder has
+    # subscribed, and the bag misses the first pairs (seen once in CI: 0 recorded of 5 saved)
+    listened = tmp_path / "listened.yaml"
+    listened.write_text("correspondence_collector:\n  ros__parameters:\n"
+                        "    wait_for_subscribers: 3\n")
     env = dict(os.environ, ROS_DOMAIN_ID=str(unique_domain_id()))
-    script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out)], env=env,
+    script = subprocess.Popen(["bash", str(SCENARIO / "run.sh"), "--out", str(out),
+                               "--override", str(listened)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                               start_new_session=True, preexec_fn=_default_sigint)
     listener = PairListener(int(env["ROS_DOMAIN_ID"]))
