@@ -63,3 +63,21 @@ def test_none_returns_the_rows_and_bad_settings_are_refused():
     bad[3, 2] = np.nan
     with pytest.raises(ValueError, match="finite"):
         spline_states(bad, 60, DT)
+
+
+@pytest.mark.parametrize("samples, dt, scale, lam", [(5, DT, 1.0, None), (7, 0.02, 1e-4, None),
+                                                     (120, DT, 50.0, None), (840, DT, 1.0, None),
+                                                     (60, 1 / 3, 1.0, 0.37)])
+def test_the_fast_spline_is_scipys_to_the_bit(samples, dt, scale, lam):
+    """_gcv.smoothing_spline chooses λ and builds the spline as scipy's make_smoothing_spline
+    does, bit for bit (the chapter 5 references depend on it; a scipy upgrade that changes
+    its GCV fails here)."""
+    from scipy.interpolate import make_smoothing_spline
+
+    from lpa_transfer.inverse_dynamics._gcv import smoothing_spline
+    rng = np.random.default_rng(samples)
+    t = np.arange(samples) * dt
+    y = scale * np.cumsum(rng.standard_normal(samples)) + np.sin(5 * t)
+    theirs, ours = make_smoothing_spline(t, y, lam=lam), smoothing_spline(y, dt, lam)
+    assert np.array_equal(theirs.t, ours.t) and np.array_equal(theirs.c, ours.c)
+    assert np.array_equal(theirs.derivative()(t), ours.derivative()(t))

@@ -109,14 +109,17 @@ if ! up_to_date project "$proj_hash"; then
     did_something=1
 fi
 
-# 7. The compiled kernels (numba) of LWPR and of LPA's mixture fit (initEM, EM), compiled once
+# 7. The compiled kernels (numba) of LWPR, of LPA's mixture fit (initEM, EM) and of the
+# smoothing splines' cross-validation (chapter 5's spline correspondences), compiled once
 # here and cached on disk next to their modules, so that the first learner or mapping node
 # does not stall compiling them. Redone when the kernels or the requirements change.
-kernels=(lpa_transfer/learners/_lwpr_kernels.py lpa_transfer/transfer/_em_kernels.py)
+kernels=(lpa_transfer/learners/_lwpr_kernels.py lpa_transfer/transfer/_em_kernels.py
+         lpa_transfer/inverse_dynamics/_gcv.py)
 kernel_hash=$( (echo "$req_hash"; sha256sum "${kernels[@]}") | digest)
 if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1 \
-        || ! ls lpa_transfer/transfer/__pycache__/_em_kernels*.nbi >/dev/null 2>&1; then
-    say "compiling the LWPR and EM kernels (numba, about 25 s)"
+        || ! ls lpa_transfer/transfer/__pycache__/_em_kernels*.nbi >/dev/null 2>&1 \
+        || ! ls lpa_transfer/inverse_dynamics/__pycache__/_gcv*.nbi >/dev/null 2>&1; then
+    say "compiling the LWPR, EM and spline kernels (numba, about 30 s)"
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$VENV/bin/python" - <<'PY'
 import numpy as np
 from lpa_transfer.learners.lwpr import LWPR
@@ -130,6 +133,8 @@ for params in ({}, {"meta": True, "diag_only": False}):
     model.predict_with_confidence(X)
 from lpa_transfer import LocalProcrustesAnalysis
 LocalProcrustesAnalysis(n_min=7, c_min=1e-7).fit(rng.normal(size=(80, 2)), rng.normal(size=(80, 2)))
+from lpa_transfer.inverse_dynamics._gcv import smoothing_spline
+smoothing_spline(rng.normal(size=20), 0.01)
 PY
     mark_done kernels "$kernel_hash"
     did_something=1

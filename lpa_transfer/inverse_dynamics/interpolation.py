@@ -7,11 +7,12 @@ come at the control rate with q̈ the backward difference of two velocities, whi
 PID's period-to-period chatter. :func:`spline_states` replaces, per stretch of consecutive
 samples (one babbling line, one trial), q̇ and τ by a smoothing cubic spline through them and
 q̈ by the derivative of q̇'s spline; q stays as measured. The spline's smoothing is chosen by
-generalised cross-validation (scipy's ``make_smoothing_spline``) unless ``lam`` is given.
+generalised cross-validation (scipy's ``make_smoothing_spline``, computed faster to the same
+bits by :mod:`~lpa_transfer.inverse_dynamics._gcv`) unless ``lam`` is given.
 """
 import numpy as np
-from scipy.interpolate import make_smoothing_spline
 
+from lpa_transfer.inverse_dynamics._gcv import smoothing_spline
 from lpa_transfer._validation import check_float, check_int
 
 #: which rows a spline runs through: 'none' keeps the samples as measured
@@ -47,11 +48,11 @@ def spline_states(rows, stretch, dt, lam=None):
         for j in range(n):
             velocity, torque = rows[block, n + j], rows[block, 3 * n + j]
             if np.ptp(velocity) > 0:
-                spline = make_smoothing_spline(t, velocity, lam=lam)
+                spline = smoothing_spline(velocity, dt, lam)
                 out[block, n + j] = spline(t)
                 out[block, 2 * n + j] = spline.derivative()(t)
             if np.ptp(torque) > 0:
-                out[block, 3 * n + j] = make_smoothing_spline(t, torque, lam=lam)(t)
+                out[block, 3 * n + j] = smoothing_spline(torque, dt, lam)(t)
     return out
 
 
