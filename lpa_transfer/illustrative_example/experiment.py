@@ -1,6 +1,13 @@
 """The §3.6 experiments as independent seeded tasks: one training size or one pair of target
-link lengths, one run each, with PA and LPA (thesis Fig. 3-6, Fig. 3-8). ``cfg`` is the
-scenario's TOML configuration (scenarios/two_link_fk/config.toml) as a dict.
+link lengths, one run each, with PA and LPA (thesis Fig. 3-6, Fig. 3-8), and one training size
+of the target learning from scratch (the §3.6 claim that without transfer convergence "would
+not have happened until well over 1000 points"). ``cfg`` is the scenario's TOML configuration
+(scenarios/two_link_fk/config.toml) as a dict.
+
+The target's forward-kinematics models are LWPR [146], as in §3.6; the learner is named in
+``[target_model]`` and defined in ``[learners.<name>]`` (``kind`` plus its hyperparameters), so
+the memory-based ``LocallyWeightedRegression`` remains available as another entry. Learners
+are deterministic given their data; all randomness is in the seeded data draws.
 """
 import concurrent.futures
 import contextlib
@@ -12,6 +19,7 @@ import numpy as np
 from tqdm import tqdm
 
 from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
+from lpa_transfer.learners.lwpr import LWPR
 from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
                                             planar_forward_kinematics, sample_joint_uniform)
 from lpa_transfer.transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
@@ -21,6 +29,13 @@ TRANSFER_METHODS = ("PA", "LPA")
 
 
 SIZE_FIELDS = ("method", "n_train", "run", "mapping_rmse_m", "model_rmse_m", "n_clusters")
+
+
+SCRATCH_FIELDS = ("learner", "method", "n_train", "run", "model_rmse_m")
+
+
+#: ``kind`` of a ``[learners.<name>]`` entry -> the regressor class it builds.
+LEARNER_KINDS = {"LWPR": LWPR, "LocallyWeightedRegression": LocallyWeightedRegression}
 
 
 LINK_FIELDS = ("method", "target_link1_m", "target_link2_m", "delta_link1_m", "delta_link2_m",
@@ -51,9 +66,17 @@ def draw_test_sets(source, target, sizes, rng):
                                                   rng)}
 
 
-def model_error(train_q, train_x, test_q, target, cfg):
-    """RMSE (m) on the target test set of a forward-kinematics model trained on (q, x)."""
-    model = LocallyWeightedRegression(**cfg["learner"]).fit(train_q, train_x)
+def make_learner(cfg, name=None):
+    """An unfitted regressor from ``[learners.<name>]`` (default: ``[target_model] learner``)."""
+    name = cfg["target_model"]["learner"] if name is None else name
+    params = dict(cfg["learners"][name])
+    return LEARNER_KINDS[params.pop("kind")](**params)
+
+
+def model_error(train_q, train_x, test_q, target, cfg, learner=None):
+    """RMSE (m) on the target test set of a forward-kinematics model trained on (q, x), the
+    rows learned in their (random) order."""
+    model = make_learner(cfg, learner).fit(train_q, train_x)
     return end_effector_rmse(model.predict(test_q),
                              planar_forward_kinematics(test_q, target.link_lengths))
 
@@ -130,9 +153,44 @@ def run_link_point(lengths, run, seed_seq, cfg):
             for m, (mapping, model, k) in scores.items()]
 
 
+def run_scratch_point(n, run, seed_seq, cfg):
+    """The target learning its forward kinematics from n of its own uniform samples, no
+    transfer (§3.6), with every learner of ``[scratch_sweep] learners`` on the same data."""
+    target, sweep = cfg["target"], cfg["scratch_sweep"]
+    rng = np.random.default_rng(seed_seq)
+    test_q = sample_joint_uniform(sweep["n_target_test"], target.joint_limits, rng)
+    train_q = sample_joint_uniform(n, target.joint_limits, rng)
+    train_x = planar_forward_kinematics(train_q, target.link_lengths)
+    return [dict(learner=name, method="no_transfer", n_train=n, run=run,
+                 model_rmse_m=model_error(train_q, train_x, test_q, target, cfg, name))
+            for name in sweep["learners"]]
+
+
+def run_scratch_reference(run, seed_seq, cfg):
+    """What the from-scratch curves are compared with: per learner of ``[scratch_sweep]
+    learners``, the model trained on the source experience transferred by LPA from
+    ``compare_n`` correspondences (§3.6: "convergence ... with about 200 data points")."""
+    source, target, sweep = cfg["source"], cfg["target"], cfg["scratch_sweep"]
+    data_seq, model_seq = (child_seed(seed_seq, i) for i in range(2))
+    rng = np.random.default_rng(data_seq)
+    n = sweep["compare_n"]
+    train_source, train_target = draw_correspondences(n, source, target, rng)
+    tests = draw_test_sets(source, target, dict(cfg["size_sweep"],
+                                                n_target_test=sweep["n_target_test"]), rng)
+    mapping = make_mapping("LPA", model_seq, cfg).fit(train_source, train_target)
+    experience = mapping.transfer(tests["experience"])
+    n_joints = source.n_joints
+    return [dict(learner=name, method="LPA", n_train=n, run=run,
+                 model_rmse_m=model_error(experience[:, :n_joints], experience[:, n_joints:],
+                                          tests["target_test_q"], target, cfg, name))
+            for name in sweep["learners"]]
+
+
 def build_tasks(cfg, seed):
-    """All runs as (function, args) with seeds spawned from one SeedSequence(seed)."""
-    size_seq, link_seq = np.random.SeedSequence(seed).spawn(2)
+    """All runs as (function, args) with seeds spawned from one SeedSequence(seed): the size
+    sweep, the link sweep and the from-scratch sweep (children 0, 1, 2 of the root; in the
+    last, child i seeds size i and the child after the sizes the transferred references)."""
+    size_seq, link_seq, scratch_seq = np.random.SeedSequence(seed).spawn(3)
     size_sweep, link_sweep = cfg["size_sweep"], cfg["link_sweep"]
     sizes = size_sweep["sizes"]
     lengths = link_lengths_grid(link_sweep)
@@ -143,7 +201,15 @@ def build_tasks(cfg, seed):
     link_tasks = [(run_link_point, ((float(l1), float(l2)), run, run_seq, cfg))
                   for (l1, l2), cell_seq in zip(grid, link_seq.spawn(len(grid)))
                   for run, run_seq in enumerate(cell_seq.spawn(link_sweep["runs"]))]
-    return size_tasks, link_tasks
+    scratch_sizes = cfg["scratch_sweep"]["sizes"]
+    runs = cfg["scratch_sweep"]["runs"]
+    *size_seqs, reference_seq = scratch_seq.spawn(len(scratch_sizes) + 1)
+    scratch_tasks = [(run_scratch_point, (n, run, run_seq, cfg))
+                     for n, n_seq in zip(scratch_sizes, size_seqs)
+                     for run, run_seq in enumerate(n_seq.spawn(runs))]
+    scratch_tasks += [(run_scratch_reference, (run, run_seq, cfg))
+                      for run, run_seq in enumerate(reference_seq.spawn(runs))]
+    return size_tasks, link_tasks, scratch_tasks
 
 
 def _call(task):

@@ -1,5 +1,7 @@
 """The §3.6 outputs: CSVs of every run, Fig. 3-6 (errors against training size), Fig. 3-8
-(errors against the difference in link lengths) and a text summary beside the thesis'.
+(errors against the difference in link lengths), the from-scratch learning curve beside the
+transferred model (the §3.6 claim "Without transfer, this would not have happened until well
+over 1000 points") and a text summary beside the thesis'.
 """
 import csv
 import math
@@ -69,9 +71,60 @@ def plot_size_sweep(rows, cfg, path):
         ax.yaxis.set_minor_formatter(NullFormatter())
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2)
-    fig.suptitle(f"Thesis Fig. 3-6: 2-link transfer {_robots_label(cfg)}, mean ± std of "
-                 f"{cfg['size_sweep']['runs']} runs")
+    fig.suptitle(f"Thesis Fig. 3-6: 2-link transfer {_robots_label(cfg)}, models "
+                 f"{_learner_label(cfg)}, mean ± std of {cfg['size_sweep']['runs']} runs")
     fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _learner_label(cfg, name=None):
+    """'lwpr (LWPR)': a [learners.<name>] entry and its kind."""
+    name = cfg["target_model"]["learner"] if name is None else name
+    return f"{name} ({cfg['learners'][name]['kind']})"
+
+
+def points_needed(scratch_means, level):
+    """Smallest swept N whose from-scratch mean error is at or below ``level`` (None if none)."""
+    return next((n for n in sorted(scratch_means) if scratch_means[n] <= level), None)
+
+
+def scratch_comparison(scratch_rows, cfg):
+    """Per learner: mean from-scratch error (m) per N, and the mean error of the same learner
+    trained on LPA-transferred experience from compare_n correspondences."""
+    means, levels = {}, {}
+    for name in cfg["scratch_sweep"]["learners"]:
+        rows = [r for r in scratch_rows if r["learner"] == name]
+        means[name] = {n: v.mean() for n, v in
+                       grouped(select(rows, "no_transfer"), "n_train", "model_rmse_m").items()}
+        levels[name] = np.mean([r["model_rmse_m"] for r in select(rows, "LPA")])
+    return means, levels
+
+
+def plot_scratch_sweep(scratch_rows, cfg, path):
+    """From-scratch model error against the target's own N, per learner (solid), beside the
+    same learner on LPA-transferred data from compare_n correspondences (dotted): §3.6,
+    convergence at about 200 points with transfer, "well over 1000" without."""
+    means, levels = scratch_comparison(scratch_rows, cfg)
+    n_cmp = cfg["scratch_sweep"]["compare_n"]
+    fig, ax = plt.subplots(figsize=(8, 5.4), constrained_layout=True)
+    for name, curve in means.items():
+        sizes = np.array(sorted(curve))
+        line, = ax.plot(sizes, [curve[n] * 1e3 for n in sizes], marker="o",
+                        label=f"no transfer: {_learner_label(cfg, name)}")
+        ax.axhline(levels[name] * 1e3, color=line.get_color(), ls=":",
+                   label=f"LPA transfer, N = {n_cmp}: {name}")
+    ax.set(xscale="log", yscale="log", xlabel="target's own training points N",
+           ylabel="forward-kinematics model RMSE (mm)",
+           title=f"Learning from scratch vs transfer, mean of {cfg['scratch_sweep']['runs']} "
+                 "runs")
+    ax.set_xticks(sizes, [str(n) for n in sizes])
+    ax.xaxis.set_minor_locator(NullLocator())
+    ax.yaxis.set_major_locator(LogLocator(subs=(1, 2, 5)))
+    ax.yaxis.set_major_formatter(PLAIN_NUMBERS)
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
@@ -125,10 +178,12 @@ def plot_link_sweep(rows, cfg, path):
     plt.close(fig)
 
 
-def summary_text(size_rows, link_rows, cfg, seed, seconds):
-    """Means per method and N, the LPA/PA mapping ratio, and link-sweep aggregates."""
+def summary_text(size_rows, link_rows, scratch_rows, cfg, seed, seconds):
+    """Means per method and N, the LPA/PA mapping ratio, link-sweep aggregates, and the
+    from-scratch errors with the points needed to reach the transferred model."""
     lines = [f"Thesis §3.6 two-link example, seed {seed}, {_robots_label(cfg)}, "
-             f"runtime {seconds:.1f} s", "",
+             f"runtime {seconds:.1f} s", f"Forward-kinematics models: {_learner_label(cfg)}",
+             "",
              "Experiment 1 (Fig. 3-6): mean ± std over "
              f"{cfg['size_sweep']['runs']} runs, RMSE in mm",
              f"{'N':>6} {'PA map':>15} {'LPA map':>15} {'LPA/PA':>7} {'LPA K':>6} "
@@ -154,4 +209,25 @@ def summary_text(size_rows, link_rows, cfg, seed, seconds):
         lines.append(f"  {field[:-2]} (mm): median PA {np.median(pa):.3f}, median LPA "
                      f"{np.median(lpa):.3f}; LPA < PA in {np.mean(lpa < pa):.0%} of cells; "
                      f"LPA < 10 mm in {np.mean(lpa < 10):.0%} of cells")
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + [""] + scratch_lines(scratch_rows, cfg)) + "\n"
+
+
+def scratch_lines(scratch_rows, cfg):
+    """The from-scratch table (mm), the same learners on LPA-transferred data from compare_n
+    correspondences, and per learner the smallest swept N that reaches that level."""
+    sweep = cfg["scratch_sweep"]
+    means, levels = scratch_comparison(scratch_rows, cfg)
+    n_cmp = sweep["compare_n"]
+    width = max(len(name) for name in means) + 1
+    lines = [f"No transfer (target learns from N own samples) vs LPA transfer from N = {n_cmp}"
+             f", mean of {sweep['runs']} runs, RMSE in mm",
+             f"{'N':>6} " + " ".join(f"{name:>{width}}" for name in means)]
+    for n in sweep["sizes"]:
+        lines.append(f"{n:>6} " + " ".join(f"{means[name][n] * 1e3:>{width}.3f}"
+                                           for name in means))
+    lines.append(f"{'LPA':>6} " + " ".join(f"{levels[name] * 1e3:>{width}.3f}" for name in means))
+    for name, curve in means.items():
+        needed = points_needed(curve, levels[name])
+        lines.append(f"  {name}: from scratch reaches its LPA transfer level of N = {n_cmp} "
+                     + (f"at N = {needed}" if needed else f"beyond N = {max(curve)} (the sweep)"))
+    return lines

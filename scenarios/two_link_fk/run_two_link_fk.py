@@ -13,7 +13,9 @@ correspondences are scored by
 
 against the baselines "no transfer" (model from the N target points alone) and "ground
 truth" (model from many true target samples). Experiment 1 sweeps N; experiment 2 sweeps the
-target's link lengths at N = 100.
+target's link lengths at N = 100. A third sweep trains the target from scratch on up to
+10,000 of its own samples to check "without transfer, this would not have happened until well
+over 1000 points". Every forward-kinematics model is LWPR, as in §3.6 (config [target_model]).
 
 Usage: run_two_link_fk.py [--config config.toml] [--out runs/two_link_fk] [--seed S] [--jobs J]
 """
@@ -25,19 +27,20 @@ from pathlib import Path
 
 import matplotlib
 matplotlib.use("Agg")
-from lpa_transfer.illustrative_example.experiment import (LINK_FIELDS, SIZE_FIELDS,  # noqa: E402
-                                                          build_tasks, run_all)
-from lpa_transfer.illustrative_example.report import (plot_link_sweep,  # noqa: E402
-                                                      plot_size_sweep, summary_text, write_csv)
+from lpa_transfer.illustrative_example.experiment import (  # noqa: E402
+    LEARNER_KINDS, LINK_FIELDS, SCRATCH_FIELDS, SIZE_FIELDS, build_tasks, make_learner, run_all)
+from lpa_transfer.illustrative_example.report import (  # noqa: E402
+    plot_link_sweep, plot_scratch_sweep, plot_size_sweep, summary_text, write_csv)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 TEST_SET_KEYS = ("n_test", "n_experience", "n_target_test")
 REQUIRED = {"": ("seed", "source_robot", "target_robot"),
-            "lpa": ("n_min", "c_min", "cluster_dims", "n_init"), "learner": ("n_neighbors",),
-            "size_sweep": ("sizes", "runs", "n_ground_truth") + TEST_SET_KEYS,
+            "lpa": ("n_min", "c_min", "cluster_dims", "n_init"), "target_model": ("learner",),
+            "learners": (), "size_sweep": ("sizes", "runs", "n_ground_truth") + TEST_SET_KEYS,
             "link_sweep": ("length_start", "length_stop", "length_step", "n_train", "runs")
-            + TEST_SET_KEYS}
+            + TEST_SET_KEYS,
+            "scratch_sweep": ("sizes", "runs", "n_target_test", "learners", "compare_n")}
 
 
 # --------------------------------------------------------------------------- configuration
@@ -51,6 +54,7 @@ def load_config(path):
         missing = [key for key in keys if key not in table]
         if missing:
             raise ValueError(f"{path}: [{section or 'top level'}] is missing {missing}")
+    check_learners(cfg, path)
     cfg["source"] = load_robot_params(path.parent / cfg["source_robot"])
     cfg["target"] = load_robot_params(path.parent / cfg["target_robot"])
     if cfg["source"].n_joints != cfg["target"].n_joints:
@@ -59,10 +63,25 @@ def load_config(path):
     return cfg
 
 
-# --------------------------------------------------------------------------- one run
+def check_learners(cfg, path):
+    """Every learner named in the config must be a ``[learners.<name>]`` entry of a known
+    ``kind`` whose hyperparameters its class accepts; compare_n must be a size-sweep size."""
+    named = [cfg["target_model"]["learner"], *cfg["scratch_sweep"]["learners"]]
+    for name in named:
+        entry = cfg["learners"].get(name)
+        if entry is None:
+            raise ValueError(f"{path}: learner {name!r} has no [learners.{name}] table")
+        if entry.get("kind") not in LEARNER_KINDS:
+            raise ValueError(f"{path}: [learners.{name}] kind must be one of "
+                             f"{sorted(LEARNER_KINDS)}, got {entry.get('kind')!r}")
+        try:
+            make_learner(cfg, name)
+        except TypeError as exc:
+            raise ValueError(f"{path}: [learners.{name}]: {exc}") from None
+    if cfg["scratch_sweep"]["compare_n"] not in cfg["size_sweep"]["sizes"]:
+        raise ValueError(f"{path}: [scratch_sweep] compare_n must be one of the size sweep's "
+                         "sizes")
 
-
-# --------------------------------------------------------------------------- outputs
 
 
 def parse_args(argv=None):
@@ -88,19 +107,24 @@ def main(argv=None):
     seed = cfg["seed"] if args.seed is None else args.seed
     args.out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    size_tasks, link_tasks = build_tasks(cfg, seed)
-    results = run_all(size_tasks + link_tasks, args.jobs)
-    size_rows = [row for rows in results[:len(size_tasks)] for row in rows]
-    link_rows = [row for rows in results[len(size_tasks):] for row in rows]
+    size_tasks, link_tasks, scratch_tasks = build_tasks(cfg, seed)
+    results = run_all(size_tasks + link_tasks + scratch_tasks, args.jobs)
+    first_link, first_scratch = len(size_tasks), len(size_tasks) + len(link_tasks)
+    size_rows = [row for rows in results[:first_link] for row in rows]
+    link_rows = [row for rows in results[first_link:first_scratch] for row in rows]
+    scratch_rows = [row for rows in results[first_scratch:] for row in rows]
     write_csv(args.out / "size_sweep.csv", SIZE_FIELDS, size_rows)
     write_csv(args.out / "link_sweep.csv", LINK_FIELDS, link_rows)
+    write_csv(args.out / "scratch_sweep.csv", SCRATCH_FIELDS, scratch_rows)
     plot_size_sweep(size_rows, cfg, args.out / "fig3_6_mapping_and_model_error.png")
     plot_link_sweep(link_rows, cfg, args.out / "fig3_8_link_sweep.png")
+    plot_scratch_sweep(scratch_rows, cfg, args.out / "points_without_transfer.png")
     config_text = Path(args.config).read_text()
     if args.seed is not None:
         config_text = f"# run with --seed {args.seed} (overrides 'seed' below)\n" + config_text
     (args.out / "config_used.toml").write_text(config_text)
-    summary = summary_text(size_rows, link_rows, cfg, seed, time.perf_counter() - start)
+    summary = summary_text(size_rows, link_rows, scratch_rows, cfg, seed,
+                           time.perf_counter() - start)
     (args.out / "summary.txt").write_text(summary)
     print(summary, end="")
     print(f"outputs written to {args.out}")
