@@ -41,8 +41,10 @@ import numpy as np
 import yaml
 
 from bench.id_transfer_headroom import CONFIG, StarRobot, babble
-from lpa_transfer.inverse_dynamics.analysis import (CONDITIONS, TRIAL_SECONDS,
-                                                    convergence_table, paired_against)
+from lpa_transfer.inverse_dynamics.analysis import (BANDS, CONDITIONS, TRIAL_SECONDS,
+                                                    band_savings,
+                                                    conditions_in, convergence_table,
+                                                    finals_against_scratch, paired_against)
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
 from lpa_transfer.inverse_dynamics.report import write_outputs
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
@@ -93,6 +95,8 @@ SETUPS = {
 THESIS = {"youbot": {"scratch": "9 / > 20", "transfer": "63 %", "random": "up to 4.6 %"},
           "pincher": {"scratch": "-", "transfer": "58.7 % (ICRA 2018)", "random": "15.8 % (ICRA 2018)"}}
 BABBLING_SECONDS = 14.4
+#: FeedForwardLearner's settings of the ``-yielding`` conditions (config.yaml's learners')
+YIELDING = {"own_w_gen": 0.3}
 TOLERANCE = 0.1
 #: The convergence rules of the tables (factor 7): analysis.convergence_table's ``rule``.
 RULES = ("scratch", "plateau")
@@ -126,14 +130,15 @@ def babble_session(config, robots, seed):
     return {name: np.vstack(parts) for name, parts in rows.items()}
 
 
-def run(setup, seed, n_trials, config_path=CONFIG):
+def run(setup, seed, n_trials, config_path=CONFIG, conditions=None, yielding=YIELDING):
     """{"robot/star/condition": curve (mm per trial)} of one set-up and experiment seed, as
     the graph's experiment (run_experiment.py) computes them: the pairs of both stars fit one
     PA and one LPA model per direction, 'random' is the target's babbling of both stars, and
-    each star's transferred data are the source's 15 trials of that star from scratch."""
+    each star's transferred data are the source's 15 trials of that star from scratch.
+    ``conditions`` (default all) and ``yielding`` as :func:`runs`."""
     return {f"{target}/{star}/{condition}": [1e3 * e for e in errors]
-            for target, star, condition, _, _, _, errors in runs(setup, seed, n_trials,
-                                                                   config_path)}
+            for target, star, condition, _, _, _, errors in runs(
+                setup, seed, n_trials, config_path, conditions=conditions, yielding=yielding)}
 
 
 def set_up(setup, seed, config_path=CONFIG):
@@ -174,14 +179,18 @@ def set_up(setup, seed, config_path=CONFIG):
     return experiment, names, robots, pairs, models
 
 
-def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, watch=None):
+def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, watch=None,
+         conditions=None, yielding=YIELDING):
     """:func:`run`'s learner runs one by one: (target, star, condition, the target's StarRobot
     of that star, the learner after its last trial, the fields its initial data made, errors
     in m); per star (default: all; the
     babbling and the models always use all), learning from scratch of every robot first (each
     source's experience), then ``targets``' (default: all) initialised conditions.
     ``watch(target, star, condition, robot, learner, made, errors)``, if given, is called
-    after every trial of the targets' runs (the curves do not change)."""
+    after every trial of the targets' runs (the curves do not change). ``conditions``: the
+    initialised conditions to run (default all of analysis.CONDITIONS); in the ``-yielding``
+    ones the transferred data yield to the own experience (FeedForwardLearner's
+    ``yielding``, its settings from ``yielding``)."""
     switches = SETUPS[setup]
     experiment, names, robots, pairs, models = set_up(setup, seed, config_path)
     interpolation = switches.get("interpolation", "none")
@@ -212,8 +221,13 @@ def runs(setup, seed, n_trials, config_path=CONFIG, targets=None, stars=None, wa
             for method in models[target]:      # the source's experience, then the own babbling
                 initial[f"own+transfer-{method}"] = np.vstack((initial[f"transfer-{method}"],
                                                                pairs[target]))
-            for condition, samples in initial.items():
-                learner = robot.learner(samples)
+                initial[f"transfer-{method}-yielding"] = initial[f"transfer-{method}"]
+            wanted = [c for c in CONDITIONS if c != "uninitialised"
+                      and (conditions is None or c in conditions)]
+            for condition in wanted:
+                samples = initial[condition]
+                learner = (robot.learner(samples, yielding=True, **yielding)
+                           if condition.endswith("-yielding") else robot.learner(samples))
                 made = n_fields(learner)
                 if switches.get("gate"):
                     gate_initial_fields(learner)
@@ -283,8 +297,9 @@ def analysed(out, setup, robots=None, star_out=None):
     """One set-up's runs (``star_out`` as :func:`load`) and their convergence tables under
     both rules, or None when it has no runs: a namespace of ``curves`` (mm), ``seeds``,
     ``robots`` (youBot first unless given), ``stars``, ``n_trials`` ({star: trials}),
-    ``metres`` (the curves in m) and ``tables`` (rule -> :func:`convergence_table`'s rows and
-    savings)."""
+    ``metres`` (the curves in m), ``conditions`` (those the curves hold), ``tables`` (rule ->
+    :func:`convergence_table`'s rows and savings) and ``bands`` (:func:`band_savings`: the
+    mean curves' savings within 5, 10 and 20 % of scratch's final error)."""
     curves, seeds = load(out, setup, star_out)
     if not curves:
         return None
@@ -294,6 +309,8 @@ def analysed(out, setup, robots=None, star_out=None):
     tables = {rule: convergence_table(metres, robots, stars, TOLERANCE, BABBLING_SECONDS,
                                       rule=rule) for rule in RULES}
     return SimpleNamespace(curves=curves, seeds=seeds, robots=robots, stars=stars,
+                           conditions=conditions_in(metres),
+                           bands=band_savings(metres, robots, stars, BABBLING_SECONDS),
                            n_trials={s: len(next(v for k, v in curves.items()
                                                   if k.split("/")[1] == s)[0]) for s in stars},
                            metres=metres,
@@ -322,12 +339,13 @@ def report(out, setups, star_out=None):
                   for rule, (rows, _) in result.tables.items()}
         paired = (paired_against(result.metres, result.robots, stars) if len(result.seeds) > 1
                   else {})
+        finals = finals_against_scratch(result.curves, result.robots, stars)
         for robot in result.robots:
             lines.append(f"| {robot} | " + " | ".join(
                 f"{star} trial 1 | trial {n_trials[star]} | conv. (scratch rule) | conv. (plateau)"
                 for star in stars) + " | saved (scratch rule) | saved (plateau) |")
             lines.append("|---" * (2 + 4 * len(stars) + 1) + "|")
-            for condition in CONDITIONS:
+            for condition in result.conditions:
                 cells = []
                 for star in stars:
                     mean = np.mean(result.curves[f"{robot}/{star}/{condition}"], axis=0)
@@ -339,7 +357,21 @@ def report(out, setups, star_out=None):
                     f"{100 * result.tables[rule][1][robot][condition]:.1f} %" for rule in RULES]
                 lines.append(f"| {condition} | " + " | ".join(cells + saved) + " |")
             thesis = THESIS[robot]
-            lines += ["", f"thesis ({robot}): scratch converges in {thesis['scratch']} trials "
+            lines += ["", f"saved by the mean curves within {' / '.join(f'{b:.0%}' for b in BANDS)}"
+                      f" of scratch's final error: " + ", ".join(
+                          f"{c} " + " / ".join(f"{100 * result.bands[b][robot][c]:.1f}"
+                                               for b in BANDS) + " %"
+                          for c in result.conditions[1:])]
+            for star in stars:
+                cells = [(c, ours, base, above, below, p) for (r, s, c), (ours, base, (
+                    above, below, _, p)) in finals.items() if r == robot and s == star]
+                if cells:
+                    lines.append(f"{star}, final error (mm, mean of the last 3 trials) against "
+                                 f"scratch's {np.mean(cells[0][2]):.2f}, paired by seed: "
+                                 + "; ".join(f"{c} {np.mean(ours):.2f} ({above} above / "
+                                             f"{below} below, p {p:.3f})"
+                                             for c, ours, _, above, below, p in cells))
+            lines += [f"thesis ({robot}): scratch converges in {thesis['scratch']} trials "
                       f"(Star 1 / Star 2); transfer saves {thesis['transfer']}, random "
                       f"{thesis['random']}"]
             for star in stars:
@@ -354,17 +386,20 @@ def report(out, setups, star_out=None):
 def summary(out, setups, star_out=None):
     """One table per target robot, one row per set-up: learning from scratch's trials to
     convergence and first-trial error per star, the thesis conditions' first-trial errors, and
-    the time saved per condition under both rules ("scratch rule / plateau")."""
+    the time saved by the mean curves per condition the runs hold under both rules ("scratch
+    rule / plateau")."""
     robots = ("youbot", "pincher")
     runs = {setup: analysed(out, setup, list(robots), star_out) for setup in setups}
+    initialised = list(dict.fromkeys(c for result in runs.values() if result is not None
+                                     for c in result.conditions[1:]))
     lines = []
     for robot in robots:
         lines += [f"### {robot} as target ({THESIS[robot]['scratch']} trials from scratch, "
                   f"transfer saves {THESIS[robot]['transfer']}, random {THESIS[robot]['random']}"
                   f" in the thesis)", "",
                   "| set-up | seeds | scratch converges (S1 / S2) | trial 1, S1: scratch / random "
-                  "/ PA / LPA (mm) | trial 1, S2 | saved: random | transfer-PA | transfer-LPA "
-                  "| own+transfer-PA | own+transfer-LPA |", "|---" * 10 + "|"]
+                  "/ PA / LPA (mm) | trial 1, S2 | saved: " + " | ".join(initialised) + " |",
+                  "|---" * (5 + len(initialised)) + "|"]
         for setup, result in runs.items():
             if result is None:
                 continue
@@ -372,10 +407,11 @@ def summary(out, setups, star_out=None):
             scratch = " / ".join(trials_text(converged[robot, s, "uninitialised"],
                                              result.n_trials[s]) for s in result.stars)
             firsts = [" / ".join(f"{np.mean(result.curves[f'{robot}/{s}/{c}'], axis=0)[0]:.1f}"
+                                 if f"{robot}/{s}/{c}" in result.curves else "-"
                                  for c in ("uninitialised", "random", "transfer-PA",
                                            "transfer-LPA")) for s in result.stars]
             saved = [" / ".join(f"{100 * result.tables[rule][1][robot][c]:.0f}" for rule in RULES)
-                     + " %" for c in CONDITIONS[1:]]
+                     + " %" if c in result.conditions else "-" for c in initialised]
             lines.append(f"| {setup} | {len(result.seeds)} | {scratch} | "
                          + " | ".join(firsts + saved) + " |")
         lines.append("")
@@ -407,6 +443,11 @@ def main(argv=None):
     one.add_argument("--seed", type=int, required=True)
     one.add_argument("--trials", type=int, default=15)
     one.add_argument("--out", type=Path, default=Path("runs/id_ablation"))
+    one.add_argument("--conditions", nargs="+", choices=CONDITIONS[1:], default=None,
+                     help="the initialised conditions to run (default all)")
+    one.add_argument("--own-w-gen", type=float, default=YIELDING["own_w_gen"],
+                     help="the -yielding conditions' field-making threshold for own samples")
+    one.add_argument("--tag", default="", help="appended to the set-up's folder under --out")
     many = sub.add_parser("report")
     many.add_argument("--out", type=Path, default=Path("runs/id_ablation"))
     many.add_argument("--setups", nargs="+", default=list(SETUPS))
@@ -427,12 +468,14 @@ def main(argv=None):
         star_out = dict(item.split("=", 1) for item in args.star_out)
         print((summary if args.summary else report)(args.out, args.setups, star_out))
         return 0
-    curves = run(args.setup, args.seed, args.trials)
-    path = args.out / args.setup / f"seed_{args.seed}.json"
+    yielding = {"own_w_gen": args.own_w_gen}
+    curves = run(args.setup, args.seed, args.trials, conditions=args.conditions,
+                 yielding=yielding)
+    path = args.out / (args.setup + args.tag) / f"seed_{args.seed}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"setup": args.setup, "switches": SETUPS[args.setup],
                                 "seed": args.seed, "trials_seconds": TRIAL_SECONDS,
-                                "curves": curves}))
+                                "yielding": yielding, "curves": curves}))
     print(f"wrote {path}", file=sys.stderr)
     return 0
 

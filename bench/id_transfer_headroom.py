@@ -80,9 +80,11 @@ class StarRobot:
             self.regressor = (self.regressor[0], {**self.regressor[1], **lwpr})
         return self
 
-    def learner(self, samples=None):
+    def learner(self, samples=None, **yielding):
+        """A fresh learner initialised with ``samples`` (as its own data, or so that they
+        yield to its own experience: FeedForwardLearner's ``yielding`` and its settings)."""
         learner = FeedForwardLearner(make_regressor(self.regressor[0], **self.regressor[1]),
-                                     PID.from_gains(self.pid_gains))
+                                     PID.from_gains(self.pid_gains), **yielding)
         if samples is not None:
             learner.initialise(samples)
         return learner

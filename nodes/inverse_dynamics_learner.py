@@ -78,6 +78,10 @@ class InverseDynamicsLearner(Node):
                          "the spread of the task's desired states")))
         if self.regressor_spec[0] == "lwpr":
             self.regressor_spec[1].setdefault("norm_in", input_scale(*self.trajectory[:3]))
+        self.own_w_gen = float(d("own_w_gen", 0.3, "after a yielding initialisation "
+                                 "(InitialiseLearner yielding): the robot's own samples make "
+                                 "a receptive field of their own unless one answers them above "
+                                 "this (LWPR's w_gen for them)", range=(0.0, 1.0), finite=True))
         self.learner = self.fresh_learner(pid)
         self.call_timeout = float(d("call_timeout", 30.0, "seconds for each robot call (step "
                                     "or reset)", positive=True))
@@ -132,10 +136,12 @@ class InverseDynamicsLearner(Node):
             markers.append(line_strip(f"{name}/actual", 0, actual, ACTUAL, stamp))
         self.marker_pub.publish(marker_array(*markers))
 
-    def fresh_learner(self, pid):
-        """A learner that knows nothing yet: a new regressor of the configured kind."""
+    def fresh_learner(self, pid, yielding=False):
+        """A learner that knows nothing yet: a new regressor of the configured kind (whose
+        initial data become a yielding prior if ``yielding``)."""
         name, hyperparameters = self.regressor_spec
-        return FeedForwardLearner(make_regressor(name, **hyperparameters), pid)
+        return FeedForwardLearner(make_regressor(name, **hyperparameters), pid,
+                                  yielding=yielding, own_w_gen=self.own_w_gen)
 
     def call(self, client, request, **options):
         return call_service(self.robot_clients.executor, client, request, self.call_timeout,
@@ -147,8 +153,11 @@ class InverseDynamicsLearner(Node):
             raise ValueError(f"samples need 4 x {self.robot.n_joints} columns (q, q_dot, "
                              f"q_ddot, tau), got {samples.shape[1]}")
         if request.reset:
-            self.learner = self.fresh_learner(self.learner.pid)
+            self.learner = self.fresh_learner(self.learner.pid, request.yielding)
             self.trial = 0
+        elif request.yielding != self.learner.yielding:
+            raise ValueError("yielding differs from the learner's: set reset to start a "
+                             f"{'yielding' if request.yielding else 'plain'} learner")
         rejected_before = self.learner.n_rejected_
         response.n_learned = self.learner.initialise(samples)
         response.n_rejected = self.learner.n_rejected_ - rejected_before

@@ -81,6 +81,13 @@ def test_initialise_rejects_bad_samples_and_keeps_serving(learner):
     answer = client.call(init, InitialiseLearner.Request(samples=to_matrix(samples), reset=True))
     assert answer.success, answer.message
     assert (answer.n_learned, answer.n_rejected) == (4, 2)
+    # a yielding prior (transfer-PA-yielding) needs a fresh learner: refused on a plain one
+    mixed = client.call(init, InitialiseLearner.Request(samples=to_matrix(samples),
+                                                        yielding=True))
+    assert not mixed.success and "reset" in mixed.message
+    prior = client.call(init, InitialiseLearner.Request(samples=to_matrix(samples), reset=True,
+                                                        yielding=True))
+    assert prior.success and (prior.n_learned, prior.n_rejected) == (4, 2), prior.message
     again = client.run(run, RunTrials.Goal(n_trials=1, frozen=True), timeout=120)
     assert again.success and len(again.tracking_errors) == 1
 

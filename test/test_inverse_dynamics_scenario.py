@@ -24,7 +24,7 @@ SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 pytestmark = [pytest.mark.timeout(600), pytest.mark.slow]
 ROBOTS = ("youbot", "pincher")
 CONDITIONS = ("uninitialised", "random", "transfer-PA", "transfer-LPA", "own+transfer-PA",
-              "own+transfer-LPA")
+              "own+transfer-LPA", "transfer-PA-yielding", "transfer-LPA-yielding")
 
 
 @pytest.fixture(scope="module")

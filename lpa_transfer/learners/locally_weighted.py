@@ -1,11 +1,12 @@
-"""Regression models the robots learn with, e.g. forward kinematics in the §3.6 example.
+"""A memory-based locally weighted affine regression.
 
 The thesis learns its models with LWPR (Locally Weighted Projection Regression [146]; §3.6,
-§5). Chapter 5's online learner is the package's LWPR (:class:`lpa_transfer.learners.lwpr.LWPR`);
-the §3.6 example (scenarios/two_link_fk) uses :class:`LocallyWeightedRegression` in its place: a
-memory-based locally weighted affine regression. It is a different learner from LWPR (no
-incremental receptive fields, no projection regression); on noise-free 2-link kinematics it
-is markedly more accurate than the LWPR ground truth the thesis reports (RMSE 0.0061 m).
+§5), and so do chapter 3's example and chapter 5's online learner
+(:class:`lpa_transfer.learners.lwpr.LWPR`). :class:`LocallyWeightedRegression` is a different
+learner (no incremental receptive fields, no projection regression), kept as an option of the
+§3.6 example (scenarios/two_link_fk, learner ``locally_weighted``) and of the 2-link graph's
+evaluation: on noise-free 2-link kinematics it is markedly more accurate than the LWPR ground
+truth the thesis reports (RMSE 0.0061 m).
 """
 import numbers
 

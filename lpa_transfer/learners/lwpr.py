@@ -403,6 +403,19 @@ class LWPR(RegressorMixin, BaseEstimator):
         conf = np.array([rfs.confidence(x, self.cutoff) for x in Xn]) * self.norm_out_
         return (Y[:, 0], conf[:, 0]) if self._y_1d else (Y, conf)
 
+    def set_w_gen(self, w_gen):
+        """From now on a sample makes a new receptive field unless one answers it above
+        ``w_gen`` (in [0, 1]); what the model has learned is kept. A yielding transfer
+        (FeedForwardLearner's ``yielding``) raises it after the transferred data, so that the
+        robot's own samples make fields of their own on its task where the transferred data's
+        fields answer them only weakly. Returns self."""
+        check_is_fitted(self, "n_data_")
+        _check_unit(w_gen, "w_gen")
+        self.w_gen = w_gen
+        self._settings.w_gen = float(w_gen)
+        self._rfs.params[_kernels.P_W_GEN] = float(w_gen)
+        return self
+
     @property
     def n_receptive_fields_(self):
         check_is_fitted(self, "n_data_")

@@ -147,13 +147,15 @@ class Experiment(Node):
     def learn(self, runs):
         """Learner runs ``(robot, star, initial_data, start_offset, label)`` of different
         robots at once (each robot has its own simulator, so they run in parallel): reset and
-        initialise each learner, run its trials from the centre pose plus ``start_offset``;
+        initialise each learner (a yielding one when the label ends in '-yielding', the
+        condition's name), run its trials from the centre pose plus ``start_offset``;
         one (errors, experience, messages) per run."""
         robots = [robot for robot, *_ in runs]
         assert len(set(robots)) == len(robots), "one run per robot at a time"
-        for robot, star, initial_data, _, _ in runs:
+        for robot, star, initial_data, _, label in runs:
             self.call(InitialiseLearner, f"/{robot}/{star}/initialise",
-                      samples=to_matrix(initial_data), reset=True)
+                      samples=to_matrix(initial_data), reset=True,
+                      yielding=label.endswith("-yielding"))
         self.recording = {robot: [] for robot in robots}
         answers = self.calls.run_many(RunTrials, [
             (f"/{robot}/{star}/run_trials", self.progress(label),
@@ -210,7 +212,7 @@ class Experiment(Node):
                                          self.interpolation, self.line_samples,
                                          self.control_period)
                      for k, robot in enumerate(self.robots)}
-            methods = [m for m in ("pa", "lpa") if any(c.endswith(f"transfer-{m.upper()}")
+            methods = [m for m in ("pa", "lpa") if any(f"transfer-{m.upper()}" in c
                                                          for c in run)]
             self.fit_models(seed, pairs, methods)
             data = {}
@@ -219,7 +221,8 @@ class Experiment(Node):
                 for star in self.stars:
                     data[target, star] = {"random": pairs[target]}
                     for method in ("PA", "LPA"):
-                        if not {f"transfer-{method}", f"own+transfer-{method}"} & set(run):
+                        if not {f"transfer-{method}", f"own+transfer-{method}",
+                                f"transfer-{method}-yielding"} & set(run):
                             continue
                         experience = scratch[source, star][1]
                         transferred = self.transfer(
@@ -230,6 +233,8 @@ class Experiment(Node):
                         data[target, star][f"transfer-{method}"] = transferred
                         data[target, star][f"own+transfer-{method}"] = np.vstack(
                             (transferred, pairs[target]))                  # own babbling last
+                        # the same data as a prior that yields to the own experience
+                        data[target, star][f"transfer-{method}-yielding"] = transferred
             # every learner meets its conditions in the same order as alone; the targets'
             # runs of a star and condition go side by side
             for star in self.stars:
