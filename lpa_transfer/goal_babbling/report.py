@@ -42,7 +42,9 @@ def report_lines(curves, experiment):
              f"({', '.join(map(str, experiment.seeds_done))}); target learns for "
              f"{experiment.total_seconds:g} s ({experiment.steps_per_second:g} movements a "
              f"simulated second), reaching threshold {1e3 * experiment.reaching_threshold:g} mm",
-             f"scratch reaches its final reaching rate {scratch_rate[-1]:.3f} first at "
+             f"the thesis' measure, read off the mean curves over the seeds: the time a "
+             f"condition takes to reach scratch's final reaching rate against scratch's; "
+             f"scratch reaches its final rate {scratch_rate[-1]:.3f} first at "
              f"{time_saved(times, scratch_rate, times, scratch_rate)[1]:g} s", "",
              f"{'condition':<22} {'rate after transfer':>19} {'(scratch then)':>14} "
              f"{'final rate':>11} {'final error (mm)':>16} {'reaches scratch final':>22} "
@@ -61,6 +63,7 @@ def report_lines(curves, experiment):
                      f"{1e3 * error[-1]:>8.1f} ± {1e3 * error_std[-1]:4.1f} "
                      f"{'never' if np.isinf(reach) else f'{reach:g} s':>22} "
                      f"{'-' if name == 'scratch' or np.isinf(saved) else f'{saved:.0%}':>10}")
+    lines += [""] + final_rate_lines(curves)
     lines += ["", "'rate after transfer': the first evaluation (right after the transfer; for "
               "scratch, after one interval); '(scratch then)': the scratch learner's mean rate "
               "at that time (0 before its first evaluation)", "",
@@ -69,6 +72,35 @@ def report_lines(curves, experiment):
     lines += every_evaluation + [""] + level_lines(curves, times, scratch_rate) + [""] + \
         comparison_lines(curves, times) + [""] + grid_lines(curves, experiment) + \
         ["", experiment.thesis]
+    return lines
+
+
+#: Evaluations at the end of a run whose mean is its final reaching rate.
+FINAL_EVALUATIONS = 3
+
+
+def final_rate_lines(curves, last=FINAL_EVALUATIONS):
+    """Each condition's final reaching rate, the mean of a run's last ``last`` evaluations,
+    against scratch's over the seeds: the difference of the means, the share of (run, scratch
+    run) pairs in which the run ends higher and the Mann-Whitney p
+    (:func:`lpa_transfer.evaluation.learning_curves.rank_sum_comparison`; unpaired, as in
+    :func:`comparison_lines`). Does transfer end where learning from scratch ends?"""
+    def finals(runs):
+        return np.array([np.mean(run["rate"][-last:]) for run in runs])
+
+    scratch = finals(curves["scratch"])
+    lines = [f"final reaching rate (mean of the last {last} evaluations; mean ± std over the "
+             f"seeds) against scratch's: the difference of the means, the share of (run, "
+             f"scratch run) pairs ending higher and the two-sided Mann-Whitney p (unpaired: a "
+             f"seed's scratch run and its transfer runs babble with different derived seeds)",
+             f"{'scratch':<22} {scratch.mean():5.3f} ± {scratch.std():5.3f}"]
+    for name, runs in curves.items():
+        if name == "scratch":
+            continue
+        ours = finals(runs)
+        share, p = rank_sum_comparison(ours, scratch)
+        lines.append(f"{name:<22} {ours.mean():5.3f} ± {ours.std():5.3f}  "
+                     f"{ours.mean() - scratch.mean():+6.3f}  {share:4.2f} (p {p:.3f})")
     return lines
 
 

@@ -14,10 +14,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import LogFormatter, MaxNLocator, ScalarFormatter
 
-from lpa_transfer.inverse_dynamics.analysis import (PLATEAU_WINDOW, TRIAL_SECONDS,
-                                                    bootstrap_savings,
-                                                    conditions_in, convergence_table,
-                                                    paired_against, per_seed_savings,
+from lpa_transfer.inverse_dynamics.analysis import (BANDS, FINAL_TRIALS, PLATEAU_WINDOW,
+                                                    TRIAL_SECONDS, band_savings,
+                                                    bootstrap_savings, conditions_in,
+                                                    convergence_table,
+                                                    finals_against_scratch, paired_against,
+                                                    per_seed_savings, scratch_finals,
                                                     simulated_seconds)
 
 
@@ -28,23 +30,160 @@ SETTINGS = ("robots", "stars", "n_trials", "tolerance", "babbling_seconds",  # i
 BOOTSTRAP_RESAMPLES = 2000
 
 
-OTHER_TOLERANCES = (0.05, 0.2)   # the report's check of how the verdict depends on it
-
-
 THESIS = {"youbot": "Star 1: 9 trials from scratch, 4 with transfer; Star 2: > 20 and 5; "
                     "63% of training time saved (random init: 4.6%)",
           "pincher": "58.7% of training time saved (random init: 15.8%)"}
 
 
+def name_width(curves):
+    """The width of the condition column: 16, or the longest condition name the curves hold."""
+    return max([16] + [len(c) for c in conditions_in(curves)])
+
+
 def paired_lines(curves, robots, stars, early_trials=5, reference="random"):
     """The report's lines of :func:`paired_against`."""
+    width = name_width(curves)
     lines = [f"paired over seeds against {reference}: seeds in which the condition's mean error "
              f"is lower / seeds (Wilcoxon signed-rank p), over trials 1-{early_trials} and over "
              f"all trials"]
     for (robot, star, condition), (early, whole) in paired_against(
             curves, robots, stars, early_trials, reference).items():
-        lines.append(f"  {robot:<9} {star:<6} {condition:<16} " + ",  ".join(
+        lines.append(f"  {robot:<9} {star:<6} {condition:<{width}} " + ",  ".join(
             f"{lower:>2}/{n} (p {p:.3f})" for lower, n, p in (early, whole)))
+    return lines
+
+
+def percent(values):
+    """Savings as the report prints them: "12.3" or, for several bands, "12.3 / 4.5"."""
+    return " / ".join(f"{100 * v:.1f}" for v in values) + "%"
+
+
+def headline_lines(curves, experiment):
+    """The report's lead, the thesis' measure (§5.5.3): per target robot the training time
+    saved read off the mean curves over the seeds, within the run's tolerance and under the
+    bands :data:`~lpa_transfer.inverse_dynamics.analysis.BANDS`, and learning from scratch's
+    final errors over the seeds that the bands are shares of."""
+    robots, stars, tolerance = experiment.robots, experiment.stars, experiment.tolerance
+    bands = tuple(sorted(set(BANDS) | {tolerance}))
+    by_band = band_savings(curves, robots, stars, experiment.babbling_seconds, bands)
+    finals = scratch_finals(curves, robots, stars)
+    lines = []
+    for robot in robots:
+        saved = by_band[tolerance][robot]
+        lines.append(f"{robot} as target, training time saved by the mean curves over the "
+                     f"{len(experiment.done_seeds)} seed(s), converged within {tolerance:.0%} "
+                     f"(trials x {TRIAL_SECONDS} s, + {experiment.babbling_seconds:g} s "
+                     f"babbling for initialised runs): "
+                     + ", ".join(f"{c} {percent([v])}" for c, v in saved.items()))
+        lines.append(f"  converged within {' / '.join(f'{b:.0%}' for b in bands)} of "
+                     f"scratch's final error: " + ", ".join(
+                         f"{c} {percent([by_band[b][robot][c] for b in bands])}"
+                         for c in saved))
+        lines.append(f"  scratch's final error (its last trial, mm; mean ± std over the seeds, "
+                     f"min-max) and the {' / '.join(f'{b:.0%}' for b in bands)} bands: "
+                     + "; ".join(f"{star} {1e3 * mean:.2f} ± {1e3 * std:.2f} "
+                                 f"({1e3 * low:.2f}-{1e3 * high:.2f}), "
+                                 + " / ".join(f"{1e3 * b * mean:.2f}" for b in bands) + " mm"
+                                 for star in stars
+                                 for mean, std, low, high in [finals[robot, star]]))
+        lines.append(f"  thesis: {THESIS.get(robot, '-')}")
+    return lines
+
+
+def final_error_lines(curves, experiment, last=FINAL_TRIALS):
+    """:func:`finals_against_scratch` as the report prints it: does a condition end where
+    learning from scratch ends? (``experiment``: robots, stars and, if known, start_noise.)"""
+    one_scratch = getattr(experiment, "start_noise", None) == 0
+    width = name_width(curves)
+    lines = [f"final error (mean of the last {last} trials, mm; mean ± std over the seeds) "
+             f"against learning from scratch's, paired by seed: the difference of the means, "
+             f"seeds above / below scratch (Wilcoxon signed-rank p)"
+             + ("; without start noise learning from scratch is one run, so the test asks "
+                "whether the seeds' finals differ from its value" if one_scratch else "")]
+    table = finals_against_scratch(curves, experiment.robots, experiment.stars, last)
+    done = set()
+    for (robot, star, condition), (finals, scratch, (above, below, n, p)) in table.items():
+        if (robot, star) not in done:
+            done.add((robot, star))
+            lines.append(f"  {robot:<9} {star:<6} {'uninitialised':<{width}} "
+                         f"{1e3 * scratch.mean():5.2f} ± {1e3 * scratch.std():4.2f}")
+        diff = finals.mean() - scratch.mean()
+        lines.append(f"  {robot:<9} {star:<6} {condition:<{width}} {1e3 * finals.mean():5.2f} ± "
+                     f"{1e3 * finals.std():4.2f}  {1e3 * diff:+5.2f} "
+                     f"({diff / scratch.mean():+6.1%})  {f'{above}/{below}':>5} of {n} "
+                     f"(p {p:.3f})")
+    return lines
+
+
+def report_text_lines(curves, experiment, where="over the node graph"):
+    """report.txt: the thesis' measure first (:func:`headline_lines`, the final errors against
+    scratch's), then the trials to convergence and errors per condition, the other readings
+    of the time saved (first trial within the band, each curve's own plateau, the bootstrap
+    over the seeds, each seed alone) and each condition against random seed by seed."""
+    args = (curves, experiment.robots, experiment.stars, experiment.tolerance,
+            experiment.babbling_seconds)
+    rows, savings = convergence_table(*args)
+    first_rows, first_savings = convergence_table(*args, stay=False)
+    plateau_rows, plateau_savings = convergence_table(*args, rule="plateau")
+    intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
+    by_seed = per_seed_savings(*args)
+    width = name_width(curves)
+    lines = [f"Thesis §5.5.3 {where}: {len(experiment.done_seeds)} seed(s) "
+             f"({', '.join(map(str, experiment.done_seeds))}), "
+             f"{experiment.n_trials} trials a condition. The thesis' measure: the training time "
+             f"saved, read off the mean learning curves over the seeds (converged: the mean "
+             f"error stays within a band of learning from scratch's final error, the thesis' "
+             f"{experiment.tolerance:.0%})", ""]
+    lines += headline_lines(curves, experiment) + [""]
+    lines += final_error_lines(curves, experiment) + [""]
+    lines += [f"trials to convergence of the mean curves (converged: the mean error stays "
+              f"within {experiment.tolerance:.0%} of learning from scratch's final error; "
+              f"'first within': the first trial within it)", "",
+              f"{'target':<9} {'star':<6} {'condition':<{width}} {'converged':>9} "
+              f"{'first within':>12}"
+              f"   tracking error (mm, mean ± std over seeds): trial 1, trials 1-5, all, last"]
+    for (r, s, c, k, n), (*_, first, _) in zip(rows, first_rows):
+        runs = 1e3 * np.asarray(curves[f"{r}/{s}/{c}"])
+        early, whole = runs[:, :5].mean(axis=1), runs.mean(axis=1)
+        lines.append(f"{r:<9} {s:<6} {c:<{width}} {k if k <= n else f'> {n}':>9} "
+                     f"{first if first <= n else f'> {n}':>12}   "
+                     f"{runs[:, 0].mean():5.2f} ± {runs[:, 0].std():4.2f}, "
+                     f"{early.mean():5.2f} ± {early.std():4.2f}, "
+                     f"{whole.mean():5.2f} ± {whole.std():4.2f}, "
+                     f"{runs[:, -1].mean():5.2f} ± {runs[:, -1].std():4.2f}")
+    lines.append("")
+    for robot in savings:
+        lines.append(f"{robot} as target, other readings of the time saved (the headline: the "
+                     f"mean curves within {experiment.tolerance:.0%}, above)")
+        lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
+                                                    for c, v in first_savings[robot].items()))
+        plateaus = ", ".join(f"{s} {c} {k if k <= n else f'> {n}'}"
+                             for r, s, c, k, n in plateau_rows if r == robot)
+        lines.append(f"  each curve by its own plateau (within {experiment.tolerance:.0%} of its "
+                     f"own final error, its last {PLATEAU_WINDOW} trials levelled off): "
+                     + ", ".join(f"{c} {100 * v:.1f}%" for c, v in plateau_savings[robot].items())
+                     + f"; trials: {plateaus}")
+        lines.append(f"  95% interval over seeds (bootstrap, {BOOTSTRAP_RESAMPLES} resamples of "
+                     f"the seeds), converged: " + ", ".join(
+                         f"{c} [{100 * low:.1f}, {100 * high:.1f}]%"
+                         for c, (low, high, *_) in intervals[robot].items()))
+        lines.append("  share of resamples saving more / as much / less than random: "
+                     + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
+                                 for c, (_, _, more, same, less) in intervals[robot].items()
+                                 if c != "random"))
+        lines.append("  each seed's curves alone (a secondary reading, not the thesis' mean "
+                     "curves), converged: median [quartiles], seeds saving more / less than "
+                     "random (Wilcoxon p): " + ", ".join(
+                         f"{c} {100 * np.median(v):.1f}% [{100 * np.percentile(v, 25):.1f}, "
+                         f"{100 * np.percentile(v, 75):.1f}]"
+                         + ("" if c == "random" else f" {more}/{less} (p {p:.3f})")
+                         for c, (v, (more, less, _, p)) in by_seed[robot].items()))
+    lines.append("")
+    if "random" in conditions_in(curves):
+        lines += paired_lines(curves, experiment.robots, experiment.stars) + [""]
+    lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
+                 f"{TRIAL_SECONDS} s, learning from scratch "
+                 f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")
     return lines
 
 
@@ -67,72 +206,7 @@ def write_outputs(curves, traces, experiment, out, where="over the node graph"):
     plot_curves(curves, experiment, out / "fig5_7_5_8_learning_curves.png")
     if traces:
         plot_traces(traces, experiment, out / "fig5_6_traces.png")
-    args = (curves, experiment.robots, experiment.stars, experiment.tolerance,
-            experiment.babbling_seconds)
-    rows, savings = convergence_table(*args)
-    first_rows, first_savings = convergence_table(*args, stay=False)
-    plateau_rows, plateau_savings = convergence_table(*args, rule="plateau")
-    intervals = bootstrap_savings(*args, n_resamples=BOOTSTRAP_RESAMPLES)
-    by_seed = per_seed_savings(*args)
-    other = {t: convergence_table(curves, experiment.robots, experiment.stars, t,
-                                  experiment.babbling_seconds)[1] for t in OTHER_TOLERANCES}
-    lines = [f"Thesis §5.5.3 {where}: {len(experiment.done_seeds)} seed(s) "
-             f"({', '.join(map(str, experiment.done_seeds))}), "
-             f"{experiment.n_trials} trials a condition. Converged: the mean error stays within "
-             f"{experiment.tolerance:.0%} of learning from scratch's final error; 'first "
-             f"within': the first trial within it", "",
-             f"{'target':<9} {'star':<6} {'condition':<16} {'converged':>9} {'first within':>12}"
-             f"   tracking error (mm, mean ± std over seeds): trial 1, trials 1-5, all, last"]
-    for (r, s, c, k, n), (*_, first, _) in zip(rows, first_rows):
-        runs = 1e3 * np.asarray(curves[f"{r}/{s}/{c}"])
-        early, whole = runs[:, :5].mean(axis=1), runs.mean(axis=1)
-        lines.append(f"{r:<9} {s:<6} {c:<16} {k if k <= n else f'> {n}':>9} "
-                     f"{first if first <= n else f'> {n}':>12}   "
-                     f"{runs[:, 0].mean():5.2f} ± {runs[:, 0].std():4.2f}, "
-                     f"{early.mean():5.2f} ± {early.std():4.2f}, "
-                     f"{whole.mean():5.2f} ± {whole.std():4.2f}, "
-                     f"{runs[:, -1].mean():5.2f} ± {runs[:, -1].std():4.2f}")
-    lines.append("")
-    for robot in savings:
-        lines.append(f"{robot} as target, training time saved (trials x 8.4 s, + "
-                     f"{experiment.babbling_seconds:g} s babbling for initialised runs), "
-                     f"converged: " + ", ".join(f"{c} {100 * v:.1f}%"
-                                                for c, v in savings[robot].items()))
-        lines.append("  first within: " + ", ".join(f"{c} {100 * v:.1f}%"
-                                                    for c, v in first_savings[robot].items()))
-        plateaus = ", ".join(f"{s} {c} {k if k <= n else f'> {n}'}"
-                             for r, s, c, k, n in plateau_rows if r == robot)
-        lines.append(f"  each curve by its own plateau (within {experiment.tolerance:.0%} of its "
-                     f"own final error, its last {PLATEAU_WINDOW} trials levelled off): "
-                     + ", ".join(f"{c} {100 * v:.1f}%" for c, v in plateau_savings[robot].items())
-                     + f"; trials: {plateaus}")
-        lines.append(f"  converged within {' / '.join(f'{t:.0%}' for t in OTHER_TOLERANCES)} "
-                     f"of scratch's final error instead: " + ", ".join(
-                         f"{c} " + " / ".join(f"{100 * other[t][robot][c]:.1f}"
-                                              for t in OTHER_TOLERANCES) + "%"
-                         for c in savings[robot]))
-        lines.append(f"  95% interval over seeds (bootstrap, {BOOTSTRAP_RESAMPLES} resamples of "
-                     f"the seeds), converged: " + ", ".join(
-                         f"{c} [{100 * low:.1f}, {100 * high:.1f}]%"
-                         for c, (low, high, *_) in intervals[robot].items()))
-        lines.append("  share of resamples saving more / as much / less than random: "
-                     + ", ".join(f"{c} {100 * more:.0f}/{100 * same:.0f}/{100 * less:.0f}%"
-                                 for c, (_, _, more, same, less) in intervals[robot].items()
-                                 if c != "random"))
-        lines.append("  seed by seed (each seed's curves alone, as the thesis' one run per "
-                     "condition), converged: median [quartiles], seeds saving more / less than "
-                     "random (Wilcoxon p): " + ", ".join(
-                         f"{c} {100 * np.median(v):.1f}% [{100 * np.percentile(v, 25):.1f}, "
-                         f"{100 * np.percentile(v, 75):.1f}]"
-                         + ("" if c == "random" else f" {more}/{less} (p {p:.3f})")
-                         for c, (v, (more, less, _, p)) in by_seed[robot].items()))
-        lines.append(f"  thesis: {THESIS.get(robot, '-')}")
-    lines.append("")
-    if "random" in conditions_in(curves):
-        lines += paired_lines(curves, experiment.robots, experiment.stars) + [""]
-    lines.append(f"simulated: {simulated_seconds(curves, experiment):.0f} s per robot (trials of "
-                 f"{TRIAL_SECONDS} s, learning from scratch "
-                 f"{'for every seed' if experiment.start_noise else 'once'}, plus the babbling)")
+    lines = report_text_lines(curves, experiment, where)
     text = "\n".join(lines) + "\n"
     (out / "report.txt").write_text(text)
     return text
@@ -287,11 +361,13 @@ def summary_lines(curves, experiment):
     stays within the convergence tolerance of learning from scratch's final error."""
     rows, _ = convergence_table(curves, experiment.robots, experiment.stars,
                                 experiment.tolerance, experiment.babbling_seconds)
-    lines = [f"{'target':<9} {'star':<6} {'condition':<16} {'trial 1 (mm)':>12} "
+    width = name_width(curves)
+    lines = [f"{'target':<9} {'star':<6} {'condition':<{width}} {'trial 1 (mm)':>12} "
              f"{'last trial (mm)':>15} {'converged at trial':>18}"]
     for robot, star, condition, k, n in rows:
         mean = 1e3 * np.mean(curves[f"{robot}/{star}/{condition}"], axis=0)
-        lines.append(f"{robot:<9} {star:<6} {condition:<16} {mean[0]:>12.2f} {mean[-1]:>15.2f} "
+        lines.append(f"{robot:<9} {star:<6} {condition:<{width}} {mean[0]:>12.2f} "
+                     f"{mean[-1]:>15.2f} "
                      f"{k if k <= n else f'> {n}':>18}")
     lines.append(f"(converged: the mean error stays within {experiment.tolerance:.0%} of "
                  f"learning from scratch's final error; {len(experiment.done_seeds)} seed(s))")
