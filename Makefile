@@ -27,8 +27,9 @@ ch3-graph:   # thesis §3.6 over the node graph, into runs/two_link_graph/
 ch4:         # thesis §4.5 over the node graph, into runs/lfd/
 	$(RUN) scenarios/lfd/run.sh $(ARGS)
 
-ch5:         # thesis §5.5.3, 10 seeds over the node graph, into runs/inverse_dynamics/
-	$(RUN) scenarios/inverse_dynamics/run.sh $(ARGS)
+ch5:         # thesis §5.5.3, 10 seeds over the node graph, into runs/inverse_dynamics/: each seed a task
+             # of a local Dask cluster on every core (ARGS='--address tcp://HOST:8786': a cluster's)
+	$(PY) -m lpa_transfer.sweeps graph ch5 $(ARGS)
 
 ch5-seed0:   # the same for seed 0 only
 	$(RUN) scenarios/inverse_dynamics/run.sh --override scenarios/inverse_dynamics/one_seed.yaml $(ARGS)
