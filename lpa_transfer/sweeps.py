@@ -298,14 +298,19 @@ def graph_tasks(chapter, out, seeds=None, config=None, overrides=()):
     return tasks
 
 
-def merge_graph(chapter, out, tasks, results, say=_say):
-    """Write each task's results on this machine and join them with the chapter's merge."""
+def _write_results(tasks, results):
+    """Each task's returned files into its run directory on this machine (the head)."""
     for task in tasks:
         for name, data in results[task.name]["files"].items():
             path = Path(task.run_dir) / name
             path.parent.mkdir(parents=True, exist_ok=True)
             if not path.exists() or path.read_bytes() != data:
                 path.write_bytes(data)
+
+
+def merge_graph(chapter, out, tasks, results, say=_say):
+    """Write each task's results on this machine and join them with the chapter's merge."""
+    _write_results(tasks, results)
     merge = GRAPH_CHAPTERS[chapter][1]
     done = subprocess.run([sys.executable, merge, str(out)] + [t.run_dir for t in tasks],
                           cwd=ROOT, capture_output=True, text=True)
@@ -335,12 +340,7 @@ def inprocess_tasks(out, setups, seeds, trials):
 def merge_inprocess(out, setups, tasks, results, say=_say):
     """The tasks' seed files on this machine, then ``export`` per set-up (``out/<setup>/``, a
     chapter 5 run directory) and ``report`` over the set-ups (``out/report.txt``)."""
-    for task in tasks:
-        for name, data in results[task.name]["files"].items():
-            path = Path(task.run_dir) / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            if not path.exists() or path.read_bytes() != data:
-                path.write_bytes(data)
+    _write_results(tasks, results)
     bench = [sys.executable, "-m", "bench.id_ablation"]
     for setup in setups:
         done = subprocess.run(bench + ["export", "--setup", setup, "--to", str(out / setup),
