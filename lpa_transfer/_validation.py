@@ -62,6 +62,12 @@ def check_float(value, name, minimum):
         raise ValueError(f"{name} must be a finite number >= {minimum}, got {value!r}")
 
 
+def check_unit(value, name):
+    """``value`` must be a real number in (0, 1] (a share, an activation threshold)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 1:
+        raise ValueError(f"{name} must be a number in (0, 1], got {value!r}")
+
+
 def check_seed(value):
     if value is not None:
         check_int(value, "random_state", minimum=0)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from sklearn.exceptions import NotFittedError
 
-from lpa_transfer._validation import check_float
+from lpa_transfer._validation import check_unit
 from lpa_transfer.exploration.correspondences import feature_vector
 from lpa_transfer.inverse_dynamics.tasks import tracking_error
 
@@ -64,9 +64,7 @@ class FeedForwardLearner:
         if yielding and not hasattr(regressor, "set_w_gen"):
             raise ValueError(f"yielding needs a regressor with set_w_gen (LWPR), got "
                              f"{type(regressor).__name__}")
-        check_float(own_w_gen, "own_w_gen", 0.0)
-        if own_w_gen > 1:
-            raise ValueError(f"own_w_gen must lie in [0, 1], got {own_w_gen!r}")
+        check_unit(own_w_gen, "own_w_gen")      # LWPR.set_w_gen's check, before any data
         self.regressor, self.pid, self.learn = regressor, pid, learn
         self.yielding, self.own_w_gen = bool(yielding), own_w_gen
         self.n_rejected_ = 0

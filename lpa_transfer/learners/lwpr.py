@@ -80,7 +80,7 @@ from scipy.sparse import issparse
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
-from lpa_transfer._validation import as_matrix, check_float, check_int
+from lpa_transfer._validation import as_matrix, check_float, check_int, check_unit
 from lpa_transfer.learners import _lwpr_kernels as _kernels
 
 #: Only RFs activated above this are updated (reference library).
@@ -410,7 +410,7 @@ class LWPR(RegressorMixin, BaseEstimator):
         robot's own samples make fields of their own on its task where the transferred data's
         fields answer them only weakly. Returns self."""
         check_is_fitted(self, "n_data_")
-        _check_unit(w_gen, "w_gen")
+        check_unit(w_gen, "w_gen")
         self.w_gen = w_gen
         self._settings.w_gen = float(w_gen)
         self._rfs.params[_kernels.P_W_GEN] = float(w_gen)
@@ -468,7 +468,7 @@ class LWPR(RegressorMixin, BaseEstimator):
         for name in ("init_lambda", "final_lambda", "tau_lambda"):
             _check_open_unit(getattr(self, name), name)
         for name in ("w_gen", "w_prune"):
-            _check_unit(getattr(self, name), name)
+            check_unit(getattr(self, name), name)
         for name in ("penalty", "meta_rate", "add_threshold", "init_S2"):
             check_float(getattr(self, name), name, minimum=0)
         check_float(self.cutoff, "cutoff", minimum=0)
@@ -628,11 +628,6 @@ def _learning_rates(init_alpha, d):
     if not (np.isfinite(alpha).all() and (alpha > 0).all()):
         raise ValueError(f"init_alpha must be finite and positive, got {init_alpha!r}")
     return alpha
-
-
-def _check_unit(value, name):
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 < value <= 1:
-        raise ValueError(f"{name} must be a number in (0, 1], got {value!r}")
 
 
 def _check_open_unit(value, name):
