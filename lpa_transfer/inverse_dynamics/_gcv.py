@@ -123,7 +123,7 @@ def _design(n, dt):
     return knots, X, E, _banded_gram(X, X), _banded_gram(X, E)
 
 
-def _gcv(lam, y, knots, X, E, gram, gram_E):
+def _gcv(lam, y, X, E, gram, gram_E):
     """GCV(λ) = (1/n) |y - f_λ|² / (1 - tr(H_λ)/n)² (Wahba 1990, eq. 4.3.1)."""
     n = len(y)
     c = solve_banded((2, 2), X + lam * E, y)
@@ -141,7 +141,7 @@ def gcv_smoothing(y, dt):
     """λ of the cubic smoothing spline through ``y`` sampled every ``dt``, chosen by GCV over
     [0, n] as scipy's ``make_smoothing_spline(np.arange(n) * dt, y)`` chooses it."""
     y = np.ascontiguousarray(y, dtype=float)
-    design = _design(len(y), float(dt))
+    _, *design = _design(len(y), float(dt))          # the knots are not needed here
     found = minimize_scalar(_gcv, bounds=(0, len(y)), method="Bounded", args=(y, *design))
     if not found.success:
         raise ValueError(f"Unable to find minimum of the GCV function: {found.message}")
