@@ -145,22 +145,21 @@ class Experiment(Node):
 
     # -- learner runs -----------------------------------------------------------------------
     def learn(self, runs):
-        """Learner runs ``(robot, star, initial_data, start_offset, label)`` of different
-        robots at once (each robot has its own simulator, so they run in parallel): reset and
-        initialise each learner (a yielding one when the label ends in '-yielding', the
-        condition's name), run its trials from the centre pose plus ``start_offset``;
-        one (errors, experience, messages) per run."""
+        """Learner runs ``(robot, star, initial_data, start_offset, yielding, label)`` of
+        different robots at once (each robot has its own simulator, so they run in parallel):
+        reset and initialise each learner (``yielding``: InitialiseLearner's), run its trials
+        from the centre pose plus ``start_offset``; one (errors, experience, messages) per
+        run."""
         robots = [robot for robot, *_ in runs]
         assert len(set(robots)) == len(robots), "one run per robot at a time"
-        for robot, star, initial_data, _, label in runs:
+        for robot, star, initial_data, _, yielding, _ in runs:
             self.call(InitialiseLearner, f"/{robot}/{star}/initialise",
-                      samples=to_matrix(initial_data), reset=True,
-                      yielding=label.endswith("-yielding"))
+                      samples=to_matrix(initial_data), reset=True, yielding=yielding)
         self.recording = {robot: [] for robot in robots}
         answers = self.calls.run_many(RunTrials, [
             (f"/{robot}/{star}/run_trials", self.progress(label),
              dict(n_trials=self.n_trials, start_offset=[float(v) for v in offset]))
-            for robot, star, _, offset, label in runs])
+            for robot, star, _, offset, _, label in runs])
         deadline = time.monotonic() + 5
         while (any(len(m) < self.n_trials for m in self.recording.values())
                and time.monotonic() < deadline):
@@ -240,7 +239,8 @@ class Experiment(Node):
             for star in self.stars:
                 for condition in run[1:]:
                     batch = [(target, star, data[target, star][condition],
-                              offsets[target, star], f"seed {seed} {target} {star} {condition}")
+                              offsets[target, star], condition.endswith("-yielding"),
+                              f"seed {seed} {target} {star} {condition}")
                              for target in self.targets]
                     for (target, *_, label), (errors, _, _) in zip(batch, self.learn(batch)):
                         curves[f"{target}/{star}/{condition}"].append(errors)
@@ -285,7 +285,7 @@ class Experiment(Node):
         its first ``n_source_trials`` trials' experience)}; the traces of the first seed's
         run are kept for Fig. 5-6."""
         batch = [(robot, star, np.zeros((0, 4 * self.n_joints[robot])), offsets[robot, star],
-                  f"seed {seed} {robot} {star} from scratch") for robot in self.robots]
+                  False, f"seed {seed} {robot} {star} from scratch") for robot in self.robots]
         done = {}
         for (robot, *_, label), (errors, experience, messages) in zip(batch, self.learn(batch)):
             self.traces.setdefault((robot, star), [_trace(messages[0]), _trace(messages[-1])])
