@@ -56,6 +56,7 @@ if { [ ${#LINK_DOWN[@]} = 3 ] || [ $KILL_MAP = 1 ]; } && [ "$SCENARIO" != two_li
          "its collector)" >&2
     exit 2
 fi
+source "$HERE/bridge.sh"
 PREFIX=lpa$$
 SWITCH=${PREFIX}sw
 declare -A ADDRESS=([rob]=10.231.0.1 [map]=10.231.0.2 [lrn]=10.231.0.3)
@@ -73,17 +74,10 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 set -e
-ip netns add "$SWITCH"
-ip -n "$SWITCH" link add br0 type bridge
-ip -n "$SWITCH" link set br0 up
+make_switch "$SWITCH"
 for host in "${!ADDRESS[@]}"; do
     ns=$PREFIX$host
-    ip netns add "$ns"
-    ip link add "$ns-s" netns "$SWITCH" type veth peer name eth0 netns "$ns"
-    ip -n "$SWITCH" link set "$ns-s" master br0 up
-    ip -n "$ns" link set lo up
-    ip -n "$ns" addr add "${ADDRESS[$host]}/24" dev eth0
-    ip -n "$ns" link set eth0 up
+    add_host "$SWITCH" "$ns" "${ADDRESS[$host]}"
     ip -n "$ns" route add 224.0.0.0/4 dev eth0       # multicast discovery, on the bridge only
     { echo "== $ns routes"; ip -n "$ns" route show; } >>"$TOPOLOGY"
 done

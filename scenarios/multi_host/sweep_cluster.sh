@@ -7,7 +7,7 @@
 # own, as on a machine of their own; the workers reach the scheduler over the bridge.
 # This is how the sweeps run on real machines, one `dask scheduler` and a `dask worker` per
 # machine (docs/scenarios.md, "Sweeps"), and how the suite checks that a cluster gives the
-# one-machine result (test/test_sweeps.py); bench/bench_sweep.py times 1 node against 2.
+# one-machine result (test/test_inverse_dynamics_variants.py); bench/bench_sweep.py times 1 node against 2.
 #
 # Usage (as root): scenarios/multi_host/sweep_cluster.sh [--nodes N] [--slots S] [--pin]
 #                  [--logs DIR] SWEEP ARGUMENTS...
@@ -43,6 +43,7 @@ if ! [[ $NODES =~ ^[1-9][0-9]?$ && $SLOTS =~ ^[1-9][0-9]*$ ]] || [ $# = 0 ]; the
     echo "usage: $0 [--nodes N] [--slots S] [--pin] [--logs DIR] SWEEP ARGUMENTS..." >&2; exit 2
 fi
 source "$ROOT/tools/env.sh"
+source "$HERE/bridge.sh"
 mkdir -p "$LOGS"
 PREFIX=lpa$$sw
 SWITCH=${PREFIX}br
@@ -69,18 +70,8 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 set -e
-ip netns add "$SWITCH"
-ip -n "$SWITCH" link add br0 type bridge
-ip -n "$SWITCH" link set br0 up
-for ((k = 1; k <= NODES; k++)); do
-    ns=$PREFIX$k
-    ip netns add "$ns"
-    ip link add "$ns-s" netns "$SWITCH" type veth peer name eth0 netns "$ns"
-    ip -n "$SWITCH" link set "$ns-s" master br0 up
-    ip -n "$ns" link set lo up
-    ip -n "$ns" addr add "10.232.0.$k/24" dev eth0
-    ip -n "$ns" link set eth0 up
-done
+make_switch "$SWITCH"
+for ((k = 1; k <= NODES; k++)); do add_host "$SWITCH" "$PREFIX$k" "10.232.0.$k"; done
 set +e
 cpus=$(nproc)
 ip netns exec "${PREFIX}1" dask scheduler --host "$HEAD" --port $PORT --no-dashboard \
