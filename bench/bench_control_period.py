@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import rclpy
 import yaml
-from lpa_transfer_nodes._ros_util import FastExecutor
+from lpa_transfer_nodes.entry import FastExecutor
 
 from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
                                                            make_regressor)
@@ -33,8 +33,9 @@ from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import StepRobot
-from lpa_transfer_nodes._ros_util import call_service, robot_stepper
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id, wait_until
+from lpa_transfer_nodes.calls import call_service
+from lpa_transfer_nodes.robot_clients import robot_stepper
+from bench.ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "scenarios" / "inverse_dynamics" / "config.yaml"

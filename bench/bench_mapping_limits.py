@@ -113,9 +113,8 @@ def through_service(work, n_points):
     from rclpy.executors import SingleThreadedExecutor
 
     from lpa_transfer_interfaces.srv import TransferPoints
-    from lpa_transfer_nodes.testing import (NodeProcess, call_service, ros_params,
-                                            unique_domain_id)
-    from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+    from bench.ros_harness import NodeProcess, call_service, ros_params, unique_domain_id
+    from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 
     domain_id = unique_domain_id()
     node = NodeProcess("lpa_mapping", domain_id, Path(work) / "log",
@@ -254,9 +253,8 @@ def latency(args):
     from rclpy.executors import SingleThreadedExecutor
 
     from lpa_transfer_interfaces.srv import FitModel, TransferPoints
-    from lpa_transfer_nodes.testing import (NodeProcess, call_service, ros_params,
-                                            unique_domain_id)
-    from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+    from bench.ros_harness import NodeProcess, call_service, ros_params, unique_domain_id
+    from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 
     work = Path(tempfile.mkdtemp(prefix="bench_mapping_latency_"))
     small_data, long_data = synthetic(2000, seed=4), synthetic(20_000, seed=5)

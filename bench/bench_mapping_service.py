@@ -35,13 +35,13 @@ from bench import datasets  # noqa: E402
 from bench.bench_lpa import INVERSE_DYNAMICS  # noqa: E402
 from lpa_transfer import load_model  # noqa: E402
 from lpa_transfer.transfer.model_store import file_name  # noqa: E402
-from lpa_transfer_nodes.testing import NodeProcess, call_service, ros_params, unique_domain_id  # noqa: E402
+from bench.ros_harness import NodeProcess, call_service, ros_params, unique_domain_id  # noqa: E402
 
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix  # noqa: E402
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix  # noqa: E402
 from lpa_transfer_interfaces.srv import FitModel, TransferPoints  # noqa: E402
 
 MODEL_ID = "youbot->pincher/inverse-dynamics"

@@ -20,7 +20,7 @@ from sensor_msgs.msg import JointState
 
 from lpa_transfer.recording import bag
 
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id, wait_until  # noqa: E402
+from bench.ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until  # noqa: E402
 
 
 def publish_at_rate(publisher, rate_hz, seconds):

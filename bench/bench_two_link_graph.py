@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-from lpa_transfer_nodes.testing import unique_domain_id  # noqa: E402
+from bench.ros_harness import unique_domain_id  # noqa: E402
 
 
 def main():

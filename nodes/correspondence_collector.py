@@ -55,10 +55,12 @@ from lpa_transfer.transfer.model_store import METHODS
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample
 from lpa_transfer_interfaces.srv import FitModel, ResetRobot, StepRobot
 from lpa_transfer_nodes.lpa_mapping import feature_columns, fit_hyperparameters
-from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, call_service, declare,
-                                          declare_array, describe_use_sim_time,
-                                          robot_resetter, robot_stepper, run_job, sim_stamp,
-                                          to_matrix, wait_for_services, wait_for_subscribers)
+from lpa_transfer_nodes.calls import call_service, wait_for_services, wait_for_subscribers
+from lpa_transfer_nodes.conversions import sim_stamp, to_matrix
+from lpa_transfer_nodes.entry import run_job
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.qos import BATCH_QOS, SAMPLE_QOS
+from lpa_transfer_nodes.robot_clients import robot_resetter, robot_stepper
 
 #: FitModel's fields as parameters: (default, description, constraints).
 FIT_FIELDS = {

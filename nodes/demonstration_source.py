@@ -22,7 +22,9 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from lpa_transfer.lfd.demonstrations import LASA_DEMOS_PER_SHAPE, lasa_shape_names
 from lpa_transfer.lfd.experiment import demonstrations, load_setup
 from lpa_transfer_interfaces.msg import Demonstration
-from lpa_transfer_nodes._ros_util import declare, describe_use_sim_time, serve, to_matrix
+from lpa_transfer_nodes.conversions import to_matrix
+from lpa_transfer_nodes.entry import serve
+from lpa_transfer_nodes.params import declare, describe_use_sim_time
 
 
 def demonstration_qos(count):

@@ -46,12 +46,12 @@ from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
 from lpa_transfer_interfaces.action import GoalBabble
 from lpa_transfer_interfaces.srv import InitialiseSensorimotor
-from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, ServiceTimeout,
-                                          answering, long_job, unless_busy,
-                                          call_service, declare, declare_array,
-                                          describe_use_sim_time, from_matrix,
-                                          robot_resetter, robot_stepper, serve, sim_stamp,
-                                          to_matrix, wait_for_services)
+from lpa_transfer_nodes.calls import ServiceTimeout, call_service, wait_for_services
+from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
+from lpa_transfer_nodes.entry import serve
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
+from lpa_transfer_nodes.servers import JobCancelled, answering, long_job, unless_busy
 from lpa_transfer_nodes.markers import (MISSED, REACHED, marker_array, sphere_list,
                                         task_marker_publisher)
 

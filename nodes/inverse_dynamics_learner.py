@@ -38,11 +38,12 @@ from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.action import RunTrials
 from lpa_transfer_interfaces.srv import InitialiseLearner
-from lpa_transfer_nodes._ros_util import (JobCancelled, RobotClients, answering, call_service,
-                                          declare, declare_array, describe_use_sim_time,
-                                          from_matrix, long_job, unless_busy,
-                                          robot_resetter, robot_stepper, serve, sim_stamp,
-                                          to_matrix, wait_for_services)
+from lpa_transfer_nodes.calls import call_service, wait_for_services
+from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
+from lpa_transfer_nodes.entry import serve
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
+from lpa_transfer_nodes.servers import JobCancelled, answering, long_job, unless_busy
 from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_array,
                                         task_marker_publisher)
 

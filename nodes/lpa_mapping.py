@@ -51,8 +51,11 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallb
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer_nodes._ros_util import (BATCH_QOS, SAMPLE_QOS, answering, declare,
-                                          describe_use_sim_time, from_matrix, serve)
+from lpa_transfer_nodes.conversions import from_matrix
+from lpa_transfer_nodes.entry import serve
+from lpa_transfer_nodes.params import declare, describe_use_sim_time
+from lpa_transfer_nodes.qos import BATCH_QOS, SAMPLE_QOS
+from lpa_transfer_nodes.servers import answering
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.exploration.correspondences import load_correspondences
 from lpa_transfer.exploration.correspondences import JOINT_FEATURES

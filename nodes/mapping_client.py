@@ -23,8 +23,8 @@ import rclpy
 
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
-from lpa_transfer_nodes._ros_util import (call_service, from_matrix, to_matrix,
-                                          wait_for_services)
+from lpa_transfer_nodes.calls import call_service, wait_for_services
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 
 #: FitModel's hyperparameters a caller may set (0 or empty: the service's default; see
 #: lpa_mapping).

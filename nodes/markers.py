@@ -12,7 +12,8 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-from lpa_transfer_nodes._ros_util import MARKERS_QOS, WORLD_FRAME
+from lpa_transfer_nodes.conversions import WORLD_FRAME
+from lpa_transfer_nodes.qos import MARKERS_QOS
 
 TOPIC = "~/task_markers"   # one topic per learner: its DELETEALL clears only its own
 DESIRED, ACTUAL = (0.12, 0.47, 0.71, 1.0), (0.84, 0.15, 0.16, 1.0)

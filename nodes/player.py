@@ -30,9 +30,10 @@ from rosgraph_msgs.msg import Clock
 import yaml
 
 from lpa_transfer.recording.bag import read_messages, summary
-from lpa_transfer_nodes._ros_util import (CLOCK_QOS, declare, declare_array,
-                                          describe_use_sim_time, message_class,
-                                          qos_from_offered, run_job, sim_stamp)
+from lpa_transfer_nodes.conversions import message_class, sim_stamp
+from lpa_transfer_nodes.entry import run_job
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.qos import CLOCK_QOS, qos_from_offered
 
 
 def bag_topics(path):

@@ -24,9 +24,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from lpa_transfer.recording.bag import BagError, BagWriter
-from lpa_transfer_nodes._ros_util import (declare, declare_array, describe_use_sim_time,
-                                          init_with_stop_event, message_class, qos_from_offered,
-                                          qos_to_dict)
+from lpa_transfer_nodes.conversions import message_class
+from lpa_transfer_nodes.entry import init_with_stop_event
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.qos import qos_from_offered, qos_to_dict
 
 DEFAULT_EXCLUDE = ["/rosout", "/parameter_events"]
 #: s: the longest a received message waits in memory before it is in the file (a SIGKILL

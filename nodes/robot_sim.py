@@ -43,10 +43,11 @@ from tf2_msgs.msg import TFMessage
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import ACTUATORS, CONTROL_MODES, RobotSimulator, robot_urdf
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
-from lpa_transfer_nodes._ros_util import (CLOCK_QOS, LATCHED_QOS, TF_QOS, WORLD_FRAME,
-                                          FastExecutor, answering, declare,
-                                          declare_array, describe_use_sim_time, serve,
-                                          sim_stamp)
+from lpa_transfer_nodes.conversions import WORLD_FRAME, sim_stamp
+from lpa_transfer_nodes.entry import FastExecutor, serve
+from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.qos import CLOCK_QOS, LATCHED_QOS, TF_QOS
+from lpa_transfer_nodes.servers import answering
 
 
 class RobotSim(Node):

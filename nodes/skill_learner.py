@@ -27,10 +27,12 @@ from lpa_transfer.robots.kinematics import arm_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
-from lpa_transfer_nodes._ros_util import (RobotClients, answering, call_service, declare,
-                                          describe_use_sim_time, from_matrix,
-                                          robot_resetter, robot_stepper, serve, sim_stamp,
-                                          to_matrix, wait_for_services)
+from lpa_transfer_nodes.calls import call_service, wait_for_services
+from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
+from lpa_transfer_nodes.entry import serve
+from lpa_transfer_nodes.params import declare, describe_use_sim_time
+from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
+from lpa_transfer_nodes.servers import answering
 from lpa_transfer_nodes.markers import ACTUAL, line_strip, marker_array, task_marker_publisher
 
 

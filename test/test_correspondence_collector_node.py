@@ -19,8 +19,8 @@ from lpa_transfer.exploration.correspondences import collect_correspondences
 from lpa_transfer.transfer.model_store import ModelStore
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
-from lpa_transfer_nodes.testing import (NodeProcess, PairListener, ros_params, run_to_end,
-                                       start_robot_sims, unique_domain_id)
+from ros_harness import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
+                         unique_domain_id)
 
 from lpa_transfer_interfaces.srv import FitModel, ListModels
 

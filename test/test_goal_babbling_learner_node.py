@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 from lpa_transfer.robots.kinematics import planar_forward_kinematics
 from lpa_transfer_interfaces.msg import Matrix, ReachingEvaluation
 from lpa_transfer_interfaces.action import GoalBabble
 from lpa_transfer_interfaces.srv import InitialiseSensorimotor
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import Marker, MarkerArray
 

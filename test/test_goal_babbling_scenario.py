@@ -12,7 +12,7 @@ from conftest import ROOT
 from lpa_transfer.recording.bag import summary
 from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer_nodes.testing import run_scenario
+from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "goal_babbling"
 CONDITIONS = ("scratch", "PA/T20", "PA-guarded/T20", "LPA/T20", "LPA-guarded/T20")

@@ -22,7 +22,7 @@ from lpa_transfer.transfer.model_store import ModelStore
 from lpa_transfer.robots.environment import stepped_environment
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
-from lpa_transfer_nodes.testing import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
+from ros_harness import (NodeProcess, PairListener, ros_params, run_to_end, start_robot_sims,
                          unique_domain_id, wait_until)
 
 

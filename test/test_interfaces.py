@@ -63,7 +63,7 @@ def test_matrix_from_rows():
 
     import numpy as np
 
-    from lpa_transfer_nodes._ros_util import matrix_from_rows
+    from lpa_transfer_nodes.conversions import matrix_from_rows
     values = array.array("d", [1, 2, 3, 4, 5, 6])
     assert np.array_equal(matrix_from_rows(2, 3, values, "source"), [[1, 2, 3], [4, 5, 6]])
     assert matrix_from_rows(3, 2, [1, 2, 3, 4, 5, 6], "source").shape == (3, 2)

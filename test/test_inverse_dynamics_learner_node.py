@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.action import RunTrials
 from lpa_transfer_interfaces.srv import InitialiseLearner
-from lpa_transfer_nodes._ros_util import from_matrix, to_matrix
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 
 PINCHER = ROOT / "scenarios" / "robots" / "pincher_arm.toml"
 CENTRE_POSE = "[0.0, 0.6, 0.9, 0.6]"
@@ -150,7 +150,7 @@ def test_run_actions_cancels_the_accepted_goals_when_one_is_refused(learner):
     trials (not after its 5), so the learner serves the next goal."""
     import time
 
-    from lpa_transfer_nodes._ros_util import run_actions
+    from lpa_transfer_nodes.calls import run_actions
 
     client, run, _, results, nodes = learner
     client.run(run, RunTrials.Goal(n_trials=0), timeout=60)     # server up, discovery done

@@ -17,7 +17,7 @@ from lpa_transfer.recording.bag import decoded_messages, summary
 from lpa_transfer.recording.scene import render
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.serial_chain import forward_kinematics
-from lpa_transfer_nodes.testing import run_scenario
+from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 # over setup.cfg's 300 s: each run takes minutes

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import run_scenario
+from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 # over setup.cfg's 300 s: two runs of a minute or more each

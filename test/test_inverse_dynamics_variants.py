@@ -14,7 +14,7 @@ import pytest
 
 from conftest import ROOT
 from lpa_transfer.inverse_dynamics.report import merge
-from lpa_transfer_nodes.testing import run_scenario, unique_domain_id
+from ros_harness import run_scenario, unique_domain_id
 
 SCENARIO = ROOT / "scenarios" / "inverse_dynamics"
 # over setup.cfg's 300 s: each run takes minutes

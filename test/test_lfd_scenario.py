@@ -9,7 +9,7 @@ import pytest
 
 from conftest import ROOT
 from lpa_transfer.recording.bag import read_messages, summary
-from lpa_transfer_nodes.testing import run_scenario
+from ros_harness import run_scenario
 
 from rclpy.serialization import deserialize_message
 from lpa_transfer_interfaces.msg import (CorrespondenceBatch, Demonstration,
@@ -99,7 +99,7 @@ def test_the_bag_holds_demonstrations_and_executed_skills(smoke_run):
 
 def test_demonstration_source_refuses_letters_out_of_reach(tmp_path):
     """A task box the human cannot reach stops the node at start, saying why."""
-    from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id, wait_until
+    from ros_harness import NodeProcess, ros_params, unique_domain_id, wait_until
     node = NodeProcess("demonstration_source", unique_domain_id(), tmp_path, ros_params(
         frames=SCENARIO / "frames.yaml", shapes="[LShape]", n_demos=1, n_samples=10,
         task_box_low="[1.0, 1.0, 1.0]", task_box_high="[1.5, 1.5, 1.5]"))

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from lpa_transfer_interfaces.srv import FitModel
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_params, unique_domain_id
 from test_lpa_mapping_node import MappingClient, fit, matrix, points
 from two_link import correspondences
 

@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_params, unique_domain_id
 from test_lpa_mapping_node import MappingClient
 from two_link import correspondences
 

@@ -8,7 +8,7 @@ import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.transfer.model_store import block_rows, transfer_in_blocks
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_params, unique_domain_id
 from test_lpa_mapping_node import MappingClient, matrix, points
 from two_link import correspondences
 

@@ -5,8 +5,7 @@ takes them from there when the request leaves them empty."""
 import pytest
 
 from lpa_transfer_nodes.mapping_client import MappingClient
-from lpa_transfer_nodes.testing import (NodeProcess, ros_params, run_to_end, start_robot_sims,
-                                        unique_domain_id)
+from ros_harness import NodeProcess, ros_params, run_to_end, start_robot_sims, unique_domain_id
 from test_correspondence_collector_node import ROBOTS
 
 PAIR = "two_link_source->two_link_target"

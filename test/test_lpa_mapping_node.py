@@ -8,12 +8,12 @@ import pytest
 
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.transfer.model_store import file_name
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 from two_link import correspondences
 
 
 from lpa_transfer_interfaces.msg import Matrix
-from lpa_transfer_nodes._ros_util import to_matrix
+from lpa_transfer_nodes.conversions import to_matrix
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel,
                                          ListModels, TransferPoints)
 

@@ -4,7 +4,7 @@ import numpy as np
 
 from lpa_transfer import LocalProcrustesAnalysis
 from lpa_transfer.transfer.model_store import file_name
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_params, unique_domain_id
 from test_lpa_mapping_node import MappingClient, matrix, points
 from two_link import correspondences
 

@@ -9,7 +9,7 @@ import rclpy
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
 from lpa_transfer.transfer.model_store import file_name
 from lpa_transfer_nodes.mapping_client import MappingClient, ModelList
-from lpa_transfer_nodes.testing import NodeProcess, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_params, unique_domain_id
 from two_link import correspondences
 
 LPA = dict(n_min=10, c_min=1e-3, random_state=0)

@@ -13,7 +13,7 @@ import pytest
 
 from conftest import ROOT
 from lpa_transfer.recording.bag import summary
-from lpa_transfer_nodes.testing import run_scenario, unique_domain_id
+from ros_harness import run_scenario, unique_domain_id
 
 SCRIPT = ROOT / "scenarios" / "multi_host" / "run.sh"
 SMOKE = ROOT / "scenarios" / "two_link_graph" / "smoke.yaml"

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import (ClientNode, NodeProcess, _terminate_with_parent,
-                                        ros_env, ros_params, run_to_end, unique_domain_id)
+from ros_harness import (ClientNode, NodeProcess, _terminate_with_parent, ros_env, ros_params,
+                         run_to_end, unique_domain_id)
 
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import DescribeParameters, GetParameters, ListParameters, SetParameters

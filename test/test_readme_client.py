@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import NodeProcess, ros_env, ros_params, unique_domain_id
+from ros_harness import NodeProcess, ros_env, ros_params, unique_domain_id
 
 
 def readme_example():

@@ -5,8 +5,8 @@ import time
 import pytest
 
 from lpa_transfer.recording import bag
-from lpa_transfer_nodes.testing import (ClientNode, NodeProcess, ros_params, run_to_end,
-                                       unique_domain_id, wait_until)
+from ros_harness import (ClientNode, NodeProcess, ros_params, run_to_end, unique_domain_id,
+                         wait_until)
 
 from rclpy.duration import Duration
 from rclpy.qos import QoSProfile, ReliabilityPolicy

@@ -9,7 +9,7 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.robots.kinematics import planar_forward_kinematics
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 from sensor_msgs.msg import JointState
 
@@ -210,7 +210,8 @@ def test_a_reset_sent_before_the_simulator_listens_is_sent_again(tmp_path):
     settle time, seen in CI); robot_resetter sends a reset again, since it is idempotent, and
     gets its answer, where the same call sent once would wait in vain."""
     from lpa_transfer_interfaces.srv import ResetRobot
-    from lpa_transfer_nodes._ros_util import ServiceTimeout, call_service, robot_resetter
+    from lpa_transfer_nodes.calls import ServiceTimeout, call_service
+    from lpa_transfer_nodes.robot_clients import robot_resetter
 
     domain_id = unique_domain_id()
     client = ClientNode(domain_id, "reset_resend_client")

@@ -13,8 +13,7 @@ from conftest import ROOT
 from tf_tree import world_poses
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import robot_urdf
-from lpa_transfer_nodes.testing import (ClientNode, NodeProcess, ros_params, unique_domain_id,
-                                        wait_until)
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id, wait_until
 
 from lpa_transfer_interfaces.srv import StepRobot
 

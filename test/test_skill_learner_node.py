@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
 from lpa_transfer.robots.kinematics import arm_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.msg import Demonstration, SkillReproduction
 from lpa_transfer_interfaces.srv import LearnSkill
 from visualization_msgs.msg import Marker, MarkerArray
-from lpa_transfer_nodes._ros_util import MARKERS_DEPTH, MARKERS_QOS, from_matrix, to_matrix
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
+from lpa_transfer_nodes.qos import MARKERS_DEPTH, MARKERS_QOS
 
 MEKA = ROOT / "scenarios" / "robots" / "meka_right_arm.toml"
 POSE = np.array([0.6, 0.4, 0.2, 1.2])      # a comfortable Meka pose (rad), inside the limits

@@ -11,7 +11,7 @@ import pytest
 from conftest import ROOT
 from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer.transfer.model_store import ModelStore
-from lpa_transfer_nodes.testing import PairListener, run_scenario, unique_domain_id
+from ros_harness import PairListener, run_scenario, unique_domain_id
 
 SCENARIO = ROOT / "scenarios" / "two_link_graph"
 MODEL_ID = "two_link_source->two_link_target"

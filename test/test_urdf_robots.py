@@ -98,7 +98,7 @@ def test_urdfs_outside_the_subset_are_refused_with_the_reason(tmp_path, text, me
 def test_robot_sim_node_serves_a_urdf_robot(urdf_file, tmp_path):
     """The node takes the URDF as its ``robot`` file, like a TOML robot file."""
     from lpa_transfer_interfaces.srv import StepRobot
-    from lpa_transfer_nodes.testing import ClientNode, NodeProcess, ros_params, unique_domain_id
+    from ros_harness import ClientNode, NodeProcess, ros_params, unique_domain_id
 
     domain_id = unique_domain_id()
     node = NodeProcess("robot_sim", domain_id, tmp_path / "log",

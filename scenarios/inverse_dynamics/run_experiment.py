@@ -58,9 +58,10 @@ from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.action import RunTrials  # noqa: E402
 from lpa_transfer_interfaces.srv import InitialiseLearner  # noqa: E402
-from lpa_transfer_nodes._ros_util import (ServiceCalls, declare,  # noqa: E402
-                                          describe_use_sim_time, from_matrix, run_job,
-                                          to_matrix, wait_for_services)
+from lpa_transfer_nodes.calls import ServiceCalls, wait_for_services  # noqa: E402
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix  # noqa: E402
+from lpa_transfer_nodes.entry import run_job  # noqa: E402
+from lpa_transfer_nodes.params import declare, describe_use_sim_time  # noqa: E402
 from lpa_transfer_nodes.mapping_client import MappingClient  # noqa: E402
 
 

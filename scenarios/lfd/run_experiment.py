@@ -52,9 +52,10 @@ from lpa_transfer.lfd.skills import (CONDITIONS, between, by_shape,  # noqa: E40
 from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import LearnSkill  # noqa: E402
-from lpa_transfer_nodes._ros_util import (ServiceCalls, ServiceTimeout,  # noqa: E402
-                                          declare, describe_use_sim_time, from_matrix,
-                                          run_job, to_matrix)
+from lpa_transfer_nodes.calls import ServiceCalls, ServiceTimeout  # noqa: E402
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix  # noqa: E402
+from lpa_transfer_nodes.entry import run_job  # noqa: E402
+from lpa_transfer_nodes.params import declare, describe_use_sim_time  # noqa: E402
 from lpa_transfer_nodes.mapping_client import MappingClient  # noqa: E402
 from lpa_transfer_nodes.demonstration_source import (demonstration_msg,  # noqa: E402
                                                      demonstration_qos)

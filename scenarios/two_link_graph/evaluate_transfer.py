@@ -37,9 +37,11 @@ from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
 from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer_interfaces.srv import StepRobot, TransferPoints
-from lpa_transfer_nodes._ros_util import (call_service, declare, describe_use_sim_time,
-                                          from_matrix, robot_stepper, run_job, to_matrix,
-                                          wait_for_services)
+from lpa_transfer_nodes.calls import call_service, wait_for_services
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
+from lpa_transfer_nodes.entry import run_job
+from lpa_transfer_nodes.params import declare, describe_use_sim_time
+from lpa_transfer_nodes.robot_clients import robot_stepper
 
 
 class TransferEvaluation(Node):

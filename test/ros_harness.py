@@ -117,7 +117,7 @@ def wait_until(predicate, timeout=20.0, period=0.05, what="condition"):
 def call_service(executor, client, request, timeout=20.0):
     """Wait for the service, call it and spin until the answer arrives (the nodes' own
     helpers: not spin_until_future_complete, which slows down with every call in rclpy 7.1)."""
-    from lpa_transfer_nodes._ros_util import call_service as call, wait_for_services
+    from lpa_transfer_nodes.calls import call_service as call, wait_for_services
 
     wait_for_services([client], timeout, threading.Event())
     return call(executor, client, request, timeout)
@@ -164,7 +164,7 @@ class ClientNode:
     def run(self, client, goal, timeout=20.0, on_feedback=None):
         """Send ``goal`` on the ActionClient ``client`` (waiting for its server first) and
         spin until the result: the Result (``success``/``message`` as a service's answer)."""
-        from lpa_transfer_nodes._ros_util import run_action, wait_for_services
+        from lpa_transfer_nodes.calls import run_action, wait_for_services
 
         wait_for_services([client], timeout, threading.Event(), self.executor)
         return run_action(self.executor, client, goal, timeout, on_feedback=on_feedback)
@@ -181,7 +181,7 @@ class PairListener(ClientNode):
 
     def __init__(self, domain_id):
         from lpa_transfer_interfaces.msg import CorrespondenceSample
-        from lpa_transfer_nodes._ros_util import SAMPLE_QOS
+        from lpa_transfer_nodes.qos import SAMPLE_QOS
 
         super().__init__(domain_id, "pair_listener")
         self.samples = []
