@@ -50,12 +50,16 @@ from lpa_transfer.goal_babbling.reaching import (evaluate_reaching, evaluation_p
                                                  reaching_errors)
 from lpa_transfer.robots.params import load_robot_params  # noqa: E402
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model  # noqa: E402
+from lpa_transfer.goal_babbling.yielding import YieldingModel  # noqa: E402
 from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padded_rows,  # noqa: E402
                                                  transfer_experience)
 
 #: nao_poppy.yaml, then the --override files (later ones win)
 CONFIG_FILES = [ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml"]
-CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded")
+CONDITIONS = ("scratch", "guided only", "LPA", "LPA-guarded", "LPA-yielding",
+              "LPA-yielding-gated", "LPA-yielding-fresh")
+#: What :func:`run` prints by default (the last three are YieldingModel's designs)
+SHOWN = CONDITIONS[:4]
 
 
 def params(node):
@@ -114,13 +118,20 @@ def model_after_guided(setup, condition):
     if condition == "LPA-guarded":
         model = GuardedModel(model, lipschitz=chain_lipschitz(
             setup.robots["target"].link_lengths))
-    model.update(*padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"]))
+    elif condition.startswith("LPA-yielding"):
+        model = YieldingModel(model, gate_radius=setup.threshold,
+                              explore="gated" if condition.endswith("-gated") else "own")
+    guided = padded_rows(setup.guided_pairs.target, setup.home, setup.shared["target"])
+    if condition == "LPA-yielding-fresh":   # the guided rows join the prior; own from home
+        return model.transfer(np.vstack((guided[0], setup.commands)),
+                              np.vstack((guided[1], setup.task_points)))
+    model.update(*guided)
     if condition != "guided only":
         initialise_with_transfer(model, setup.commands, setup.task_points)
     return model
 
 
-def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
+def run(rate, seed, total=5000.0, guided=600.0, interval=600.0, conditions=SHOWN):
     setup = prepare(rate, seed, total, guided)
     arms, points, threshold, babbler = setup.arms, setup.points, setup.threshold, setup.babbler
 
@@ -132,7 +143,7 @@ def run(rate, seed, total=5000.0, guided=600.0, interval=600.0):
 
     scratch = babbler("target", 1).start(arms["target"])
     curves = {"scratch": curve(scratch, scratch.model_, 0.0)}
-    for name in CONDITIONS[1:]:
+    for name in conditions[1:]:
         model = model_after_guided(setup, name)
         first = evaluate_reaching(model.inverse, arms["target"], points, threshold).rate
         curves[name] = [first] + curve(babbler("target", 3).start(arms["target"], model),
@@ -337,6 +348,8 @@ def main():
     parser.add_argument("--mixing", action="store_true")
     parser.add_argument("--guard", action="store_true")
     parser.add_argument("--unshared-noise", type=float, metavar="K")
+    parser.add_argument("--conditions", nargs="+", choices=CONDITIONS[1:],
+                        default=list(SHOWN[1:]), help="run's conditions beside scratch")
     args = parser.parse_args()
     CONFIG_FILES.extend(args.override)
     diagnosis = accuracy if args.accuracy else mixing if args.mixing else \
@@ -357,8 +370,9 @@ def main():
     for rate in args.rates:
         for seed in args.seeds:
             print(f"\n{rate:g} movements a simulated second, seed {seed}")
-            for name, values in run(rate, seed).items():
-                print(f"  {name:<12}" + "".join(f"{v:6.2f}" for v in values))
+            for name, values in run(rate, seed,
+                                    conditions=("scratch", *args.conditions)).items():
+                print(f"  {name:<20}" + "".join(f"{v:6.2f}" for v in values))
 
 
 if __name__ == "__main__":

@@ -68,7 +68,8 @@ from lpa_transfer.goal_babbling.experiment import (Experiment1, _test_points, ev
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer.goal_babbling.reaching import evaluation_points, reaching_errors
 from lpa_transfer.goal_babbling.seeds import derived_seeds
-from lpa_transfer.goal_babbling.transfer import transfer_experience
+from lpa_transfer.goal_babbling.transfer import initialise_with_transfer, transfer_experience
+from lpa_transfer.goal_babbling.yielding import YieldingModel
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer.exploration.correspondences import PairCheck, SettlingStep
 from lpa_transfer.robots.environment import stepped_environment
@@ -78,6 +79,8 @@ from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 ACCURACY_MM = (1.0, 5.0, 10.0)
+#: The grid points of NeighbourLog.eval_split, by their neighbours
+SPLITS = ("all_own", "transferred_accurate", "transferred_inaccurate")
 
 
 PHYSICS_STEPS = 100   # physics steps of 1 ms a movement (config.yaml: steps_per_sample)
@@ -265,8 +268,8 @@ class NeighbourLog:
             return (float(reached[mask].mean()) if mask.any() else float("nan"),
                     int(mask.sum()))
         return dict(eval_neighbours_transferred=float(transferred.mean()),
-                    rate_all_own=rate(none), rate_transferred_accurate=rate(good),
-                    rate_transferred_inaccurate=rate(bad))
+                    **dict(zip((f"rate_{kind}" for kind in SPLITS),
+                               (rate(none), rate(good), rate(bad)))))
 
 
 def density(config, own_points, transferred_points, radius=0.025):
@@ -316,12 +319,14 @@ def run_scratch(config, seed, physics=None):
 
 
 def run_transfer_condition(config, seed, guided_seconds, variant="plain", method="lpa",
-                           guided_longest=240.0, physics=None):
+                           guided_longest=240.0, physics=None, yielding=None):
     """One transfer run as the graph builds it (module docstring), instrumented: the learning
     curve with, at every evaluation, the neighbour split (:class:`NeighbourLog`), the mean share
     of transferred neighbours in the goal-babbling steps since the previous evaluation, the
     density of transferred samples (at the transfer and at the end), the final sweep over grids
-    and thresholds, and the transfer's ``info``."""
+    and thresholds, and the transfer's ``info``. ``yielding`` (a dict of
+    :class:`~lpa_transfer.goal_babbling.yielding.YieldingModel` hyperparameters) keeps the
+    transferred rows in a YieldingModel instead (no neighbour split then: NaN)."""
     target = config.arm(config.target_links)
     points = _test_points(config)
     n_commands = _n_commands(config, guided_seconds)
@@ -335,10 +340,15 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
                 pair_residual_p95_rad=float(np.quantile(residual, 0.95)),
                 pair_residual_max_rad=float(residual.max()))
     model = make_sensorimotor_model(forward=False)
+    if yielding is not None:
+        model = YieldingModel(model, **yielding)
     model.update(own[:, :2], own[:, 2:])
     if len(commands):
-        model.update(commands, task_points, weights)
-    log = NeighbourLog(model.inverse, len(own), len(own) + len(commands), errors)
+        initialise_with_transfer(model, commands, task_points) if yielding is not None \
+            else model.update(commands, task_points, weights)
+    own_knn = model.model.inverse if yielding is not None else model.inverse
+    n_in_own = len(own) + (0 if yielding is not None else len(commands))
+    log = NeighbourLog(own_knn, len(own), n_in_own, errors)
     density_start = density(config, own[:, 2:], task_points)
     curve = []
 
@@ -348,7 +358,9 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
         log.mode = "babble"
         babble_share = float(np.mean(log.babble)) if log.babble else float("nan")
         log.babble = []
-        split = log.eval_split(reach, config.threshold)
+        split = log.eval_split(reach, config.threshold) if yielding is None else dict(
+            eval_neighbours_transferred=float("nan"), **{f"rate_{kind}": (float("nan"), 0)
+                                                         for kind in SPLITS})
         curve.append(dict(time=time, rate=float(np.mean(reach <= config.threshold)),
                           mean_error=float(reach.mean()),
                           babble_neighbours_transferred=babble_share, **split))
@@ -359,9 +371,10 @@ def run_transfer_condition(config, seed, guided_seconds, variant="plain", method
                     lambda b: evaluate(guided_seconds + b.time_), config.interval)
     if not np.isclose(curve[-1]["time"], config.total_seconds):
         evaluate(config.total_seconds)   # the end, as the graph's last evaluation
-    X = model.inverse.X_
-    own_all = np.vstack((X[:len(own)], X[len(own) + len(commands):]))
-    density_end = density(config, own_all, X[len(own):len(own) + len(commands)])
+    X = own_knn.X_
+    own_all = np.vstack((X[:len(own)], X[n_in_own:]))
+    density_end = density(config, own_all, task_points if yielding is not None
+                          else X[len(own):n_in_own])
     log.mode = "eval"
     sweep = _final_sweep(config, model, target)
     return dict(info=info, curve=curve, density_start=density_start, density_end=density_end,

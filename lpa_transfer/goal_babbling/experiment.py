@@ -21,8 +21,10 @@ from lpa_transfer.goal_babbling.reaching import evaluate_reaching, evaluation_po
 from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer.goal_babbling.transfer import initialise_with_transfer, transfer_experience
 from lpa_transfer.goal_babbling.seeds import derived_seeds
+from lpa_transfer.goal_babbling.yielding import YieldingModel
 
-CONDITIONS = ("scratch", "PA", "LPA", "PA-guarded", "LPA-guarded")
+CONDITIONS = ("scratch", "PA", "LPA", "PA-guarded", "LPA-guarded", "PA-yielding",
+              "LPA-yielding")
 
 
 @dataclass(frozen=True)
@@ -35,8 +37,9 @@ class Experiment1:
     learns for ``total_seconds``, of which the first ``guided_seconds`` are guided exploration
     (T_guided: 60, 120, 180 or 240); it is evaluated every ``interval`` s (and at the end) on
     grid points ``eval_spacing`` apart, reaching rate at ``threshold`` (0.01 m, §6.5.1).
-    ``babbling``, ``lpa`` and ``guard`` are (name, value) pairs of GoalBabbling,
-    LocalProcrustesAnalysis and GuardedModel hyperparameters. LPA: N_min 7 (Humanoids 2015's
+    ``babbling``, ``lpa``, ``guard`` and ``yielding`` are (name, value) pairs of
+    GoalBabbling, LocalProcrustesAnalysis, GuardedModel and YieldingModel hyperparameters
+    (the yielding gate defaults to ``threshold``). LPA: N_min 7 (Humanoids 2015's
     2-link value); the thesis' c_min 0.001 yields one cluster here (c_k of eq. 3.15 shrinks
     like 1/sqrt(N_k): 600 pairs with 2 cm RMS error give c_k ≈ 8e-4), so c_min is 1e-7 and
     N_min sets the number of clusters (§3.5). The guard's L defaults to
@@ -57,6 +60,7 @@ class Experiment1:
     babbling: tuple = ()
     lpa: tuple = (("n_min", 7), ("c_min", 1e-7))
     guard: tuple = ()
+    yielding: tuple = ()
 
     def arm(self, links):
         limits = np.array(self.joint_limits, dtype=np.float64)
@@ -128,7 +132,8 @@ def run_condition(condition, seed, config=Experiment1()):
     starts with guided exploration (Alg. 7) for ``guided_seconds``, both joints shared, the
     source executing the same commands; PA or LPA is fitted on the (q̄, x) pairs; the source's
     experience is transferred (§6.4.1) into the target's model — with weight 1 ("PA",
-    "LPA", as the thesis) or into a :class:`GuardedModel` ("…-guarded") — and the target goes
+    "LPA", as the thesis), into a :class:`GuardedModel` ("…-guarded") or a
+    :class:`YieldingModel` ("…-yielding") — and the target goes
     on babbling. Time accounting: the target's clock starts with guided exploration, so its
     T_guided s count toward ``total_seconds`` (the source's replay of the commands runs on the
     other robot and costs the target nothing; fitting and transfer take no simulated time);
@@ -146,6 +151,9 @@ def run_condition(condition, seed, config=Experiment1()):
     if condition.endswith("-guarded"):
         guard = {"lipschitz": chain_lipschitz(config.target_links), **dict(config.guard)}
         model = GuardedModel(model, **guard)
+    elif condition.endswith("-yielding"):
+        model = YieldingModel(model, **{"gate_radius": config.threshold,
+                                        **dict(config.yielding)})
     results, transferred = {}, [0]
 
     def evaluate(inverse, time, n_transferred):
@@ -153,7 +161,7 @@ def run_condition(condition, seed, config=Experiment1()):
         results[round(float(time), 6)] = (reaching.mean_error, reaching.rate, n_transferred)
 
     def on_tick(babbling):
-        active = model.n_active_ if isinstance(model, GuardedModel) else transferred[0]
+        active = model.n_active_ if hasattr(model, "n_active_") else transferred[0]
         evaluate(model.inverse, babbling.time_, active)
 
     if condition == "scratch":
@@ -179,7 +187,7 @@ def _guided_phase(condition, config, babbler, model, seed, evaluate, times):
         raise ValueError(f"need 0 < guided_seconds <= total_seconds, got {seconds!r}")
     source, target = config.arm(config.source_links), config.arm(config.target_links)
     pairs = guided_exploration(babbler, source, target, [0, 1], [0, 1], seconds, model)
-    own = model.model.inverse if isinstance(model, GuardedModel) else model.inverse
+    own = model.model.inverse if hasattr(model, "transfer") else model.inverse
     for time in times[times < seconds]:
         n = 1 + int(round(time * babbler.steps_per_second))   # the home sample, then steps
         evaluate(clone(own).fit(own.X_[:n], own.Y_[:n], own.sample_weight_[:n]), time, 0)

@@ -15,7 +15,6 @@ import numpy as np
 
 from lpa_transfer import _validation as check
 from lpa_transfer.robots.kinematics import check_joints, pad_transferred
-from lpa_transfer.goal_babbling.negative_transfer import GuardedModel
 
 
 def transfer_experience(mapping, source_experience, target_home, shared_joints):
@@ -45,10 +44,11 @@ def padded_rows(rows, target_home, shared_joints):
 
 
 def initialise_with_transfer(model, commands, points):
-    """Add transferred samples to a target's model: a :class:`GuardedModel` takes them as
-    transferred (low weight, retirable); a plain SensorimotorModel learns them with weight 1,
-    exactly like its own data, as the thesis does (§6.4, §6.5.1)."""
-    if isinstance(model, GuardedModel):
+    """Add transferred samples to a target's model: a :class:`GuardedModel` (low weight,
+    retirable) or a :class:`lpa_transfer.goal_babbling.yielding.YieldingModel` (overridden by
+    own samples) keeps them apart, through its ``transfer``; a plain SensorimotorModel learns
+    them with weight 1, exactly like its own data, as the thesis does (§6.4, §6.5.1)."""
+    if hasattr(model, "transfer"):
         return model.transfer(commands, points)
     return model.update(commands, points)
 

@@ -38,6 +38,8 @@ def main():
                         help="T_guided of the plain LPA runs")
     parser.add_argument("--variants", nargs="*", default=list(VARIANTS_LATE))
     parser.add_argument("--no-scratch", action="store_true")
+    parser.add_argument("--yielding", nargs="*", default=[], choices=["own", "gated"],
+                        help="also LPA into a YieldingModel exploring so, at every --guided")
     parser.add_argument("--modes", nargs="+", default=["kinematic", "physics"],
                         choices=["kinematic", "physics"])
     args = parser.parse_args()
@@ -54,6 +56,10 @@ def main():
             for guided in args.guided:
                 runs[f"LPA/T{guided:g}"] = dx.run_transfer_condition(config, seed, guided,
                                                                      physics=physics)
+                for explore in args.yielding:
+                    runs[f"LPA-yielding-{explore}/T{guided:g}"] = dx.run_transfer_condition(
+                        config, seed, guided, physics=physics,
+                        yielding=dict(gate_radius=config.threshold, explore=explore))
             for guided in args.variant_times:
                 for variant in args.variants:
                     runs[f"LPA-{variant}/T{guided:g}"] = dx.run_transfer_condition(
