@@ -12,27 +12,15 @@ the request, read from a correspondence file inside ``data_dir``, or received on
 a restarted service answers as before. Every bad request is answered with ``success=false``
 and the library's message; the node keeps serving.
 
-Limits (parameters): one request's work is bounded. A fit of more than ``max_fit_points``
-correspondences, with more than ``max_n_init`` initEM restarts (LPA Alg. 5) or a ``k_max``
-above ``max_k_max`` is refused, naming the parameter and its value; ``k_max = 0`` means at
-most ``max_k_max`` clusters (the same model as an unbounded fit that stays below it). A
-transfer through an LPA model (Alg. 4) runs in blocks of about ``transfer_block_elements``
-points x clusters (:func:`lpa_transfer.transfer.model_store.transfer_in_blocks`).
+Limits (parameters, :data:`LIMITS`): one request's work is bounded; a fit beyond them is
+refused, naming the parameter; a transfer through an LPA model (Alg. 4) runs in blocks.
 
-Concurrency: the node runs on a MultiThreadedExecutor (``EXECUTOR_THREADS`` threads) with
-three callback groups: ``~/fit`` in a mutually exclusive group (one fit at a time),
-``~/transfer``, ``~/describe``, ``~/list`` and ``~/delete`` in a reentrant group, the
-correspondence topics in a third group. A fit thus runs in its own thread while transfers on
-stored models are answered in others, with the same values as when nothing else runs; the
-store swaps a refitted model in atomically under its lock, so until the new model is saved
-the old one answers. Threads, not a worker process: numpy releases the GIL in its BLAS calls
-and array loops, and LPA's fit (Alg. 3, 5) is vectorised (no per-point Python loop), so its
-Python holds the GIL only in short stretches. Measured (bench/bench_mapping_limits.py
-``--latency``, bench/README.md): transfers answered within the 100 ms p99 goal while a
-20,000-point 20-D LPA fit runs; a worker process would add pickling of the correspondences
-and the model and a second interpreter for no gain in latency. SIGINT/SIGTERM during a fit:
-the node exits without waiting for it (nothing is stored; an interrupted save leaves the old
-file, see the model store).
+Concurrency: a MultiThreadedExecutor (``EXECUTOR_THREADS`` threads), ``~/fit`` in a mutually
+exclusive callback group, the other services in a reentrant one and the topics in a third, so
+that transfers on stored models are answered, with the same values, while a fit runs; the
+store swaps a refitted model in atomically. Threads, not a worker process: numpy releases the
+GIL in its BLAS calls and LPA's fit is vectorised (measurements: docs/nodes.md).
+SIGINT/SIGTERM during a fit: the node exits without waiting for it (nothing is stored).
 
 From your own node, call it through :class:`lpa_transfer_nodes.mapping_client.MappingClient`.
 Parameters, topics, services and FitModel's hyperparameters (latent_dim, n_min, c_min, ...):
@@ -53,108 +41,36 @@ from rclpy.node import Node
 
 from lpa_transfer_nodes.conversions import from_matrix
 from lpa_transfer_nodes.entry import serve
-from lpa_transfer_nodes.params import declare, describe_use_sim_time
+from lpa_transfer_nodes.params import declare_table, describe_use_sim_time
 from lpa_transfer_nodes.qos import BATCH_QOS, SAMPLE_QOS
 from lpa_transfer_nodes.servers import answering
-from lpa_transfer import LocalProcrustesAnalysis
-from lpa_transfer.exploration.correspondences import load_correspondences
-from lpa_transfer.exploration.correspondences import JOINT_FEATURES
+from lpa_transfer.exploration.correspondences import read_correspondences
+from lpa_transfer.transfer.fit_spec import FitSpec, limited
 from lpa_transfer.transfer.model_store import METADATA, ModelStore, transfer_in_blocks
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample, Matrix
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
 
 
-LPA_DEFAULTS = LocalProcrustesAnalysis().get_params()
 #: Threads of the node's executor: a fit, the correspondence topics and concurrent transfers.
 EXECUTOR_THREADS = 4
-
-
-def fit_hyperparameters(request):
-    """The library's hyperparameters from a FitModel request.
-
-    0 / empty mean None for latent_dim, k_max and cluster_dims, and the library default for
-    n_min and n_init (a request that leaves them unset gets a working model). c_min is taken
-    as given: 0 is meaningful ("always split", the thesis' advice to control K with n_min).
-    """
-    latent_dim = request.latent_dim or None
-    if request.method != "lpa":
-        return dict(latent_dim=latent_dim)
-    return dict(latent_dim=latent_dim, n_min=request.n_min or LPA_DEFAULTS["n_min"],
-                c_min=request.c_min, k_max=request.k_max or None,
-                cluster_dims=list(request.cluster_dims) or None,
-                n_init=request.n_init or LPA_DEFAULTS["n_init"],
-                random_state=request.random_state)
-
-
-#: Limits of one request's work: parameter name -> (default, description).
-LIMITS = {
-    "max_fit_points": (200_000, "most correspondences one fit may use; a fit with more is "
+PARAMETERS = (
+    ("model_dir", "~/.lpa_transfer/models", "directory where models are persisted, one .npz "
+     "per model id; all are reloaded on start"),
+    ("data_dir", "", "directory of the correspondence files FitModel's correspondence_file "
+     "may name (relative to it; nothing outside it is read); empty: the folder "
+     "'correspondences' beside model_dir"))
+#: Limits of one request's work (:func:`lpa_transfer.transfer.fit_spec.limited`).
+LIMITS = tuple(row + (dict(range=(1, None)),) for row in (
+    ("max_fit_points", 200_000, "most correspondences one fit may use; a fit with more is "
                                 "refused"),
-    "max_n_init": (20, "most initEM restarts (FitModel n_init) one LPA fit may ask for; more is "
-                       "refused"),
-    "max_k_max": (2000, "most clusters one LPA fit may create: a larger FitModel k_max is "
+    ("max_n_init", 20, "most initEM restarts (FitModel n_init) one LPA fit may ask for; more "
+                       "is refused"),
+    ("max_k_max", 2000, "most clusters one LPA fit may create: a larger FitModel k_max is "
                         "refused, k_max = 0 means this many"),
-    "transfer_block_elements": (20_000_000, "a transfer through an LPA model runs in blocks of "
-                                            "rows of about this many points x clusters, so "
-                                            "that its work memory stays bounded"),
-}
-
-
-def limited(hyperparameters, n_points, limits):
-    """The hyperparameters of a fit within the service's ``limits`` (parameter -> value):
-    ``k_max = None`` (0 in the request) becomes ``max_k_max``; more correspondences than
-    ``max_fit_points``, an n_init above ``max_n_init`` or a k_max above ``max_k_max`` is a
-    ValueError naming the limit parameter and its value."""
-    def refuse(what, name):
-        raise ValueError(f"{what} exceeds the limit {name} = {limits[name]} (a parameter of "
-                         f"lpa_mapping)")
-    if n_points > limits["max_fit_points"]:
-        refuse(f"the fit's {n_points} correspondences", "max_fit_points")
-    hyperparameters = dict(hyperparameters)
-    if "n_init" in hyperparameters:
-        if hyperparameters["n_init"] > limits["max_n_init"]:
-            refuse(f"n_init = {hyperparameters['n_init']}", "max_n_init")
-        if hyperparameters["k_max"] is None:
-            hyperparameters["k_max"] = limits["max_k_max"]
-        elif hyperparameters["k_max"] > limits["max_k_max"]:
-            refuse(f"k_max = {hyperparameters['k_max']}", "max_k_max")
-    return hyperparameters
-
-
-def feature_columns(features, width):
-    """Names of the ``width`` columns of samples made of ``features`` (the correspondence
-    files' ``features``, in the order ``feature_vector`` concatenates them): a joint feature
-    gives one column per joint (``position[0]``, ``position[1]``, ...), any other one column
-    (``ee_x``); ``[]`` when ``width`` does not fit them."""
-    features = [str(feature) for feature in features]
-    joint = [feature for feature in features if feature in JOINT_FEATURES]
-    n_joints, rest = divmod(width - (len(features) - len(joint)), max(1, len(joint)))
-    if not features or rest or n_joints < (1 if joint else 0) or (not joint and n_joints):
-        return []
-    names = []
-    for feature in features:
-        names += ([f"{feature}[{j}]" for j in range(n_joints)] if feature in JOINT_FEATURES
-                  else [feature])
-    return names
-
-
-def file_metadata(path, source_dim, target_dim):
-    """What a correspondence file says of its robots and columns (its ``source_robot``,
-    ``target_robot`` and ``features`` entries, as the collector saves them): metadata for
-    the model; ``{}`` for what it does not have."""
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            entries = {key: archive[key] for key in ("source_robot", "target_robot", "features")
-                       if key in archive.files}
-    except (OSError, ValueError):
-        return {}
-    metadata = {key: str(entries[key]) for key in ("source_robot", "target_robot")
-                if key in entries and entries[key].ndim == 0}
-    if "features" in entries and entries["features"].ndim == 1:
-        metadata["source_features"] = feature_columns(entries["features"], source_dim)
-        metadata["target_features"] = feature_columns(entries["features"], target_dim)
-    return {key: value for key, value in metadata.items() if value}
+    ("transfer_block_elements", 20_000_000, "a transfer through an LPA model runs in blocks "
+                                            "of rows of about this many points x clusters, "
+                                            "so that its work memory stays bounded")))
 
 
 class MappingService(Node):
@@ -162,18 +78,12 @@ class MappingService(Node):
 
     def __init__(self):
         super().__init__("lpa_mapping")
-        model_dir = declare(self, "model_dir", "~/.lpa_transfer/models",
-                            "directory where models are persisted, one .npz per model id; all "
-                            "are reloaded on start")
-        data_dir = declare(self, "data_dir", "",
-                           "directory of the correspondence files FitModel's correspondence_file "
-                           "may name (relative to it; nothing outside it is read); empty: the "
-                           "folder 'correspondences' beside model_dir")
-        self.limits = {name: declare(self, name, default, description, range=(1, None))
-                       for name, (default, description) in LIMITS.items()}
+        settings = declare_table(self, PARAMETERS)
+        self.limits = declare_table(self, LIMITS)
         describe_use_sim_time(self)
-        self.store = ModelStore(model_dir)
-        self.data_dir = Path(data_dir or self.store.directory.parent / "correspondences")
+        self.store = ModelStore(settings["model_dir"])
+        self.data_dir = Path(settings["data_dir"] or self.store.directory.parent
+                             / "correspondences")
         self.data_dir = self.data_dir.expanduser().resolve()
         self.received, self.received_robots, self.received_lock = {}, {}, threading.Lock()
         self.fitting = threading.Event()
@@ -243,17 +153,21 @@ class MappingService(Node):
         return path
 
     def correspondences(self, request):
-        """The request's correspondences, its matrices, else its file, else a received pair,
-        as ``(source, target, metadata)``: what the file or the pair says of the robots and
-        the columns (:func:`file_metadata`), and where they came from."""
+        """The request's correspondences, its matrices, else its file (read_correspondences),
+        else a received pair, as ``(source, target, metadata)``: what the file or the pair
+        says of the robots and the columns, and where they came from."""
         if request.source.data or request.target.data:
             return (from_matrix(request.source, "source"), from_matrix(request.target, "target"),
                     dict(correspondences="request"))
         if request.correspondence_file:
             path = self.correspondence_path(request.correspondence_file)
-            source, target = load_correspondences(path)
-            return source, target, dict(file_metadata(path, source.shape[1], target.shape[1]),
-                                        correspondences=f"file {path}")
+            pairs = read_correspondences(path)
+            said = dict(zip(("source_robot", "target_robot", "source_features",
+                             "target_features"),
+                            (pairs.source_robot, pairs.target_robot, *pairs.columns())))
+            return pairs.source, pairs.target, dict(
+                {key: value for key, value in said.items() if value},
+                correspondences=f"file {path}")
         if request.received_pair:
             source, target, metadata = self.received_correspondences(request.received_pair)
             return source, target, dict(metadata,
@@ -263,7 +177,8 @@ class MappingService(Node):
 
     def fit(self, request, response):
         source, target, found = self.correspondences(request)
-        hyperparameters = limited(fit_hyperparameters(request), len(source), self.limits)
+        hyperparameters = limited(FitSpec.from_request(request).hyperparameters(), len(source),
+                                  self.limits)
         metadata = dict(found, **{key: value for key, value in (
             ("source_robot", request.source_robot), ("target_robot", request.target_robot),
             ("source_features", list(request.source_features)),

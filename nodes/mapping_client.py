@@ -17,19 +17,20 @@ the service's message.
 import json
 import threading
 from collections import namedtuple
+from dataclasses import fields
 
 import numpy as np
 import rclpy
 
+from lpa_transfer.transfer.fit_spec import FitSpec
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
 from lpa_transfer_nodes.calls import call_service, wait_for_services
 from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 
-#: FitModel's hyperparameters a caller may set (0 or empty: the service's default; see
-#: lpa_mapping).
-FIT_FIELDS = ("latent_dim", "n_min", "c_min", "k_max", "cluster_dims", "n_init",
-              "random_state")
+#: FitModel's hyperparameters a caller may set (0 or empty: the service's default,
+#: :class:`~lpa_transfer.transfer.fit_spec.FitSpec`).
+FIT_FIELDS = tuple(field.name for field in fields(FitSpec) if field.name != "method")
 #: FitModel's metadata, stored with the model (empty: taken from a correspondence file or a
 #: received pair where they say it).
 METADATA_FIELDS = ("source_robot", "target_robot", "source_features", "target_features")

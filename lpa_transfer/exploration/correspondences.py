@@ -89,6 +89,23 @@ def feature_names(features, joint_names):
             for name in features for joint in (joint_names if name in JOINT_FEATURES else [""])]
 
 
+def feature_columns(features, width):
+    """Names of the ``width`` columns of samples made of ``features`` (in the order
+    :func:`feature_vector` concatenates them): a joint feature gives one column per joint
+    (``position[0]``, ``position[1]``, ...), any other one column (``ee_x``); ``[]`` when
+    ``width`` does not fit them. The column names a model's metadata carries."""
+    features = [str(feature) for feature in features]
+    joint = [feature for feature in features if feature in JOINT_FEATURES]
+    n_joints, rest = divmod(width - (len(features) - len(joint)), max(1, len(joint)))
+    if not features or rest or n_joints < (1 if joint else 0) or (not joint and n_joints):
+        return []
+    names = []
+    for feature in features:
+        names += ([f"{feature}[{j}]" for j in range(n_joints)] if feature in JOINT_FEATURES
+                  else [feature])
+    return names
+
+
 @dataclass
 class CorrespondenceSet:
     """Paired samples: row i of ``source`` corresponds to row i of ``target``."""
@@ -106,6 +123,11 @@ class CorrespondenceSet:
     def __len__(self):
         return len(self.source)
 
+    def columns(self):
+        """The names of the source and of the target columns (:func:`feature_columns`)."""
+        return (feature_columns(self.features, self.source.shape[1]),
+                feature_columns(self.features, self.target.shape[1]))
+
     def save(self, path):
         """Write an ``.npz`` (``source``, ``target`` and the metadata as strings/scalars)
         atomically: a temporary file renamed into place, so a reader never sees half a file."""
@@ -119,9 +141,21 @@ class CorrespondenceSet:
         os.replace(temporary, path)
 
 
-def _read_arrays(path, optional=()):
-    """The ``source`` and ``target`` arrays of a correspondence file (``.npz`` with those
-    keys) and a dict of those ``optional`` members it holds, read from one opening."""
+#: A correspondence file's members besides ``source``, ``target`` and ``meta_*``, as
+#: CorrespondenceSet fields: (its type, the member's dimensions).
+_HEADER = {"source_robot": (str, 0), "target_robot": (str, 0), "pairing_rule": (str, 0),
+           "sim_time": (float, 0), "complete": (bool, 0), "features": (tuple, 1)}
+
+
+def read_correspondences(path):
+    """A correspondence file (:meth:`CorrespondenceSet.save`) as a :class:`CorrespondenceSet`:
+    its pairs, robot names, pairing rule, features, clock and completeness, and its
+    ``meta_*`` members as ``metadata`` (arrays, by name without ``meta_``).
+
+    What the file does not say (a member it lacks, or of another shape) keeps the set's
+    default, except ``features``: ``()`` when the file names none (its columns are
+    unknown). A ValueError says why a file cannot be read, or that it lacks source or target.
+    """
     unreadable = (OSError, EOFError, ValueError, zipfile.BadZipFile)   # e.g. a truncated file
     try:
         archive = np.load(os.fspath(path), allow_pickle=False)
@@ -135,16 +169,22 @@ def _read_arrays(path, optional=()):
             raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
                              f"(has {archive.files})")
         try:
-            return archive["source"], archive["target"], {
-                key: archive[key] for key in optional if key in archive.files}
+            members = {key: archive[key] for key in archive.files}
         except unreadable as exc:   # a damaged member, object arrays
             raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+    header = {key: kind(members[key].tolist() if kind is tuple else members[key])
+              for key, (kind, ndim) in _HEADER.items()
+              if key in members and members[key].ndim == ndim}
+    header.setdefault("features", ())
+    return CorrespondenceSet(members["source"], members["target"], **header,
+                             metadata={key[len("meta_"):]: value for key, value in members.items()
+                                       if key.startswith("meta_")})
 
 
 def load_correspondences(path):
-    """``source`` and ``target`` arrays of a correspondence file (``.npz`` with those keys)."""
-    source, target, _ = _read_arrays(path)
-    return source, target
+    """``source`` and ``target`` arrays of a correspondence file (:func:`read_correspondences`)."""
+    pairs = read_correspondences(path)
+    return pairs.source, pairs.target
 
 
 def load_guided_exploration(path):
@@ -152,14 +192,15 @@ def load_guided_exploration(path):
     target_pairs, target_experience, followed)``: the correspondences, the target's rows of
     all N commands and which of them the source followed (N,) bool. A file without the last
     two (every pair a correspondence) gives ``target_pairs`` and all True."""
-    source, target, extra = _read_arrays(path, ("meta_followed", "meta_target_experience"))
-    if "meta_followed" not in extra:
+    pairs = read_correspondences(path)
+    source, target, extra = pairs.source, pairs.target, pairs.metadata
+    if "followed" not in extra:
         return source, target, target, np.ones(len(target), dtype=bool)
-    if "meta_target_experience" not in extra:
+    if "target_experience" not in extra:
         raise ValueError(f"guided-exploration file {path} has meta_followed but no "
                          f"meta_target_experience")
-    followed = extra["meta_followed"].astype(bool)
-    experience = extra["meta_target_experience"]
+    followed = extra["followed"].astype(bool)
+    experience = extra["target_experience"]
     if followed.shape != (len(experience),) or followed.sum() != len(target):
         raise ValueError(f"guided-exploration file {path}: {int(followed.sum())} followed "
                          f"commands of {len(followed)}, {len(experience)} rows of experience "

@@ -48,7 +48,8 @@ import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.exploration.correspondences import load_correspondences  # noqa: E402
+from lpa_transfer.exploration.correspondences import (load_correspondences,  # noqa: E402
+                                                      read_correspondences)
 from lpa_transfer.inverse_dynamics.analysis import CONDITIONS  # noqa: E402
 from lpa_transfer.inverse_dynamics.interpolation import (INTERPOLATIONS,  # noqa: E402
                                                          interpolated)
@@ -257,9 +258,8 @@ class Experiment(Node):
         """Splines run per babbling line: refuse pair files whose rows are not whole lines
         of ``babbling_line_samples`` (a dropped pair would shift every line after it)."""
         for path in files:
-            with np.load(path) as data:
-                dropped = int(data["meta_pairs_dropped"]) if "meta_pairs_dropped" in data else 0
-                rows = len(data["source"])
+            pairs = read_correspondences(path)
+            dropped, rows = int(pairs.metadata.get("pairs_dropped", 0)), len(pairs)
             if dropped or rows % self.line_samples:
                 raise ValueError(f"{path}: {rows} pairs, {dropped} dropped: not whole babbling "
                                  f"lines of {self.line_samples} samples, which interpolation "
