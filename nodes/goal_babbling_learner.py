@@ -30,7 +30,6 @@ import threading
 import numpy as np
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from lpa_transfer.robots.kinematics import robot_kinematics
@@ -38,6 +37,7 @@ from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer._validation import check_x_bounds
 from lpa_transfer.robots.kinematics import hold_at_home
 from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz
+from lpa_transfer.goal_babbling.transfer import initialise_with_transfer
 from lpa_transfer.goal_babbling.reaching import (evaluation_points, reaching_errors,
                                                  reaching_rate)
 from lpa_transfer.robots.environment import stepped_environment, task_dims
@@ -49,7 +49,7 @@ from lpa_transfer_interfaces.srv import InitialiseSensorimotor
 from lpa_transfer_nodes.calls import ServiceTimeout, call_service, wait_for_services
 from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
 from lpa_transfer_nodes.entry import serve
-from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.params import DOUBLES, INTEGERS, declare_table, describe_use_sim_time
 from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
 from lpa_transfer_nodes.servers import JobCancelled, answering, long_job, unless_busy
 from lpa_transfer_nodes.markers import (MISSED, REACHED, marker_array, sphere_list,
@@ -59,6 +59,51 @@ from lpa_transfer_nodes.markers import (MISSED, REACHED, marker_array, sphere_li
 EVALUATION_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 GUARD_KEYS = ("transferred_weight", "coverage_radius", "coverage_count",
               "disagreement_threshold", "lipschitz", "n_checked")
+ROBOT = (
+    ("robot", "", "the robot parameter file (joint limits and analytic kinematics); required"),
+    ("home", DOUBLES, "q_home (rad), where babbling starts and returns to; unset: zero clipped "
+     "into the joint limits", dict(additional_constraints="one value per joint")),
+    ("active_joints", INTEGERS, "babble with these joints only, the others held at home; "
+     "unset: all", dict(additional_constraints="distinct joint indices")),
+    *((f"x_{end}", DOUBLES, f"X_bounds' {end} corner: the task box goals are drawn from (m); "
+       "required", dict(additional_constraints="one value per task coordinate"))
+      for end in ("low", "high")))
+#: GoalBabbling's hyperparameters.
+GOAL_BABBLING = (
+    ("n_subtargets", 10, "GoalBabbling's T, sub-targets per goal", dict(range=(1, None))),
+    ("sigma", 0.1, "GoalBabbling's exploration noise", dict(range=(0.0, None), finite=True)),
+    ("drift", 0.01, "drift of the exploration noise", dict(range=(0.0, None), finite=True)),
+    ("p_home", 0.1, "probability of returning home", dict(range=(0.0, 1.0))),
+    ("steps_per_second", 10.0, "babbling steps a simulated second (the learner's clock)",
+     dict(positive=True, finite=True)),
+    ("seed", 0, "GoalBabbling's seed (unless an initialise with reset gives one)",
+     dict(range=(0, None))))
+LEARNING = GOAL_BABBLING + (
+    ("steps_per_sample", 100, "physics steps per babbling step", dict(range=(1, None))),
+    ("physics_step", 0.001, "the simulator's physics step (s)",
+     dict(positive=True, finite=True)),
+    ("n_neighbors", 3, "K of the K-nearest-neighbour inverse model", dict(range=(1, None))),
+    ("guard", False, "take transferred samples into a GuardedModel (lower weight, retired once "
+     "covered or contradicted by own data) instead of learning them like own data"),
+    ("guard_params", "{}", "JSON object of GuardedModel's hyperparameters; lipschitz defaults "
+     "to the robot's chain_lipschitz; ignored when guard is false",
+     dict(additional_constraints="keys from " + ", ".join(GUARD_KEYS))))
+EVALUATION = (
+    *((f"eval_{end}", DOUBLES, f"the {end} corner of the test points' box (m); unset: "
+       f"X_bounds' {end} corner") for end in ("low", "high")),
+    ("eval_spacing", 0.05, "the test points' grid spacing (m)",
+     dict(positive=True, finite=True)),
+    ("eval_joint_samples", 20000, "the joint samples that find the reachable grid points "
+     "(once, at start-up)", dict(range=(1, None))),
+    ("reaching_threshold", 0.01, "a test point counts as reached within this distance (m)",
+     dict(range=(0.0, None), finite=True)),
+    ("call_timeout", 30.0, "s for each robot call", dict(range=(0.0, None), finite=True)),
+    ("wait_timeout", 30.0, "s to wait for the robot's services",
+     dict(range=(0.0, None), finite=True)),
+    ("step_service", "robot_sim/step", "the robot's StepRobot service, resolved in the node's "
+     "namespace"),
+    ("reset_service", "robot_sim/reset", "the robot's ResetRobot service, resolved in the "
+     "node's namespace"))
 
 
 class Stopped(ValueError):
@@ -68,95 +113,53 @@ class Stopped(ValueError):
 class GoalBabblingLearner(Node):
     def __init__(self, stop):
         super().__init__("goal_babbling_learner")
-        def doubles(name, description, constraints=""):
-            return declare_array(self, name, Parameter.Type.DOUBLE_ARRAY, description,
-                                 additional_constraints=constraints)
-
         self.stop = stop
-        path = declare(self, "robot", "", "the robot parameter file (joint limits and analytic "
-                       "kinematics); required")
-        if not path:
+        p = declare_table(self, ROBOT)
+        if not p["robot"]:
             raise ValueError("the parameter 'robot' (a robot .toml file) is required")
-        self.robot = load_robot_params(os.path.expanduser(path))
-        home = doubles("home", "q_home (rad), where babbling starts and returns to; unset: "
-                       "zero clipped into the joint limits", "one value per joint")
-        self.kinematics = robot_kinematics(self.robot, home or None)
-        active = declare_array(self, "active_joints", Parameter.Type.INTEGER_ARRAY,
-                               "babble with these joints only, the others held at home; "
-                               "unset: all", additional_constraints="distinct joint indices")
-        if active:   # the other joints held at home (their ranges shrink to it)
-            self.kinematics = hold_at_home(self.kinematics, active)
+        self.robot = load_robot_params(os.path.expanduser(p["robot"]))
+        self.kinematics = robot_kinematics(self.robot, p["home"] or None)
+        if p["active_joints"]:   # the other joints held at home (their ranges shrink to it)
+            self.kinematics = hold_at_home(self.kinematics, p["active_joints"])
         self.n_task = task_dims(self.kinematics)
-        x_low, x_high = (doubles(f"x_{end}", f"X_bounds' {end} corner: the task box goals are "
-                                 f"drawn from (m); required", "one value per task coordinate")
-                         for end in ("low", "high"))
-        if not x_low or not x_high:
+        if not p["x_low"] or not p["x_high"]:
             raise ValueError("the parameters 'x_low' and 'x_high' (X_bounds, the task box goals "
                              "are drawn from) are required")
-        self.x_bounds = check_x_bounds((x_low, x_high), self.n_task)
-        self.babbling_params = dict(
-            n_subtargets=declare(self, "n_subtargets", 10, "GoalBabbling's T, sub-targets per "
-                                 "goal", range=(1, None)),
-            sigma=declare(self, "sigma", 0.1, "GoalBabbling's exploration noise",
-                          range=(0.0, None), finite=True),
-            drift=declare(self, "drift", 0.01, "drift of the exploration noise",
-                          range=(0.0, None), finite=True),
-            p_home=declare(self, "p_home", 0.1, "probability of returning home",
-                           range=(0.0, 1.0)),
-            steps_per_second=declare(self, "steps_per_second", 10.0, "babbling steps a "
-                                     "simulated second (the learner's clock)", positive=True,
-                                     finite=True),
-            seed=declare(self, "seed", 0, "GoalBabbling's seed (unless an initialise with "
-                         "reset gives one)", range=(0, None)))
-        self.steps_per_sample = declare(self, "steps_per_sample", 100, "physics steps per "
-                                        "babbling step", range=(1, None))
-        physics_step = declare(self, "physics_step", 0.001, "the simulator's physics step (s)",
-                               positive=True, finite=True)
-        self.n_neighbors = declare(self, "n_neighbors", 3, "K of the K-nearest-neighbour "
-                                   "inverse model", range=(1, None))
-        self.guard = self.guard_spec(
-            declare(self, "guard", False, "take transferred samples into a GuardedModel "
-                    "(lower weight, retired once covered or contradicted by own data) instead "
-                    "of learning them like own data"),
-            declare(self, "guard_params", "{}", "JSON object of GuardedModel's "
-                    "hyperparameters; lipschitz defaults to the robot's chain_lipschitz; "
-                    "ignored when guard is false",
-                    additional_constraints="keys from " + ", ".join(GUARD_KEYS)))
-        eval_bounds = tuple(doubles(f"eval_{end}", f"the {end} corner of the test points' box "
-                                    f"(m); unset: X_bounds' {end} corner") or bound
-                            for end, bound in zip(("low", "high"), self.x_bounds))
-        self.eval_spacing = eval_spacing = declare(
-            self, "eval_spacing", 0.05, "the test points' grid spacing (m)", positive=True,
-            finite=True)
-        eval_joint_samples = declare(self, "eval_joint_samples", 20000, "the joint samples "
-                                     "that find the reachable grid points (once, at start-up)",
-                                     range=(1, None))
-        self.threshold = declare(self, "reaching_threshold", 0.01, "a test point counts as "
-                                 "reached within this distance (m)", range=(0.0, None),
-                                 finite=True)
-        self.call_timeout = declare(self, "call_timeout", 30.0, "s for each robot call",
-                                    range=(0.0, None), finite=True)
-        self.wait_timeout = declare(self, "wait_timeout", 30.0, "s to wait for the robot's "
-                                    "services", range=(0.0, None), finite=True)
-        step_service = declare(self, "step_service", "robot_sim/step", "the robot's StepRobot "
-                               "service, resolved in the node's namespace")
-        reset_service = declare(self, "reset_service", "robot_sim/reset", "the robot's "
-                                "ResetRobot service, resolved in the node's namespace")
+        self.x_bounds = check_x_bounds((p["x_low"], p["x_high"]), self.n_task)
+        learning = declare_table(self, LEARNING)
+        self.babbling_params = {name: learning[name] for name, *_ in GOAL_BABBLING}
+        self.steps_per_sample = learning["steps_per_sample"]
+        self.n_neighbors = learning["n_neighbors"]
+        self.guard = self.guard_spec(learning["guard"], learning["guard_params"])
+        p = declare_table(self, EVALUATION)
+        self.eval_spacing, self.threshold = p["eval_spacing"], p["reaching_threshold"]
+        self.call_timeout, self.wait_timeout = p["call_timeout"], p["wait_timeout"]
         describe_use_sim_time(self)
-        self.check_hyperparameters(physics_step)
-        self.points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
-                                        spacing=eval_spacing,
-                                        n_joint_samples=eval_joint_samples)
-        if not len(self.points):
-            raise ValueError(f"no test points: no point of the grid of {eval_spacing:g} m over "
-                             f"the box {np.round(eval_bounds, 6).tolist()} is reachable (check "
-                             f"eval_low/eval_high, x_low/x_high and eval_spacing)")
-        self.robot_clients = RobotClients(self, step_service, reset_service)
+        self.check_hyperparameters(learning["physics_step"])
+        self.points = self.test_points(p)
+        self.robot_clients = RobotClients(self, p["step_service"], p["reset_service"])
         self.environment = stepped_environment(
             self.kinematics, robot_stepper(self.call, self.robot_clients.step, self.robot.name),
             self.steps_per_sample, on_sample=self.on_sample)
         self.sim_time = 0.0
         self.start_afresh()
+        self.serve()
+
+    def test_points(self, p):
+        """The reachable points of the test grid over the evaluation box (§6.5)."""
+        eval_bounds = tuple(p[f"eval_{end}"] or bound
+                            for end, bound in zip(("low", "high"), self.x_bounds))
+        points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
+                                   spacing=p["eval_spacing"],
+                                   n_joint_samples=p["eval_joint_samples"])
+        if not len(points):
+            raise ValueError(f"no test points: no point of the grid of {p['eval_spacing']:g} m "
+                             f"over the box {np.round(eval_bounds, 6).tolist()} is reachable "
+                             f"(check eval_low/eval_high, x_low/x_high and eval_spacing)")
+        return points
+
+    def serve(self):
+        """Publish the evaluations and offer ~/initialise and the ~/babble action."""
         self.marker_pub = task_marker_publisher(self)
         self.evaluation_pub = self.create_publisher(ReachingEvaluation, "reaching_evaluation",
                                                     EVALUATION_QOS)
@@ -286,11 +289,9 @@ class GoalBabblingLearner(Node):
         d = self.robot.n_joints
         if len(own):
             self.model.update(own[:, :d], own[:, d:])
-        if len(transferred):
-            if self.guard is not None:
-                self.model.transfer(transferred[:, :d], transferred[:, d:])
-            else:   # like own data, weight 1 (§6.4, §6.5.1)
-                self.model.update(transferred[:, :d], transferred[:, d:])
+        if len(transferred):   # guarded, or like own data with weight 1 (§6.4, §6.5.1)
+            initialise_with_transfer(self.model, transferred[:, :d], transferred[:, d:])
+            if self.guard is None:
                 self.n_transferred += len(transferred)
         self.clock_offset += elapsed
         response.n_own, response.n_transferred = len(own), len(transferred)

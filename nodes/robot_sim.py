@@ -33,7 +33,6 @@ import os
 from pathlib import Path
 
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 from geometry_msgs.msg import Point, PointStamped, TransformStamped
 from sensor_msgs.msg import JointState
@@ -45,62 +44,55 @@ from lpa_transfer.robots.simulator import ACTUATORS, CONTROL_MODES, RobotSimulat
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 from lpa_transfer_nodes.conversions import WORLD_FRAME, sim_stamp
 from lpa_transfer_nodes.entry import FastExecutor, serve
-from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.params import DOUBLES, declare_table, describe_use_sim_time
 from lpa_transfer_nodes.qos import CLOCK_QOS, LATCHED_QOS, TF_QOS
 from lpa_transfer_nodes.servers import answering
+
+
+def parameters(namespace):
+    """robot_sim's parameters as a table (:func:`~lpa_transfer_nodes.params.declare_table`);
+    the TF frame prefix defaults to the node's ``namespace``."""
+    return (
+        ("robot", "", "robot parameter file (scenarios/robots/*.toml) or a URDF file (*.urdf: "
+         "its serial chain from the root link); set exactly one of robot and urdf"),
+        ("urdf", "", "a URDF file simulated as it is, instead of robot"),
+        ("control_mode", "position", "position: commands are joint targets (rad); torque: "
+         "commands are joint torques (N m)", dict(choices=CONTROL_MODES)),
+        ("physics_step", 1e-3, "the pybullet time step (s)", dict(positive=True, finite=True)),
+        ("control_rate", 100.0, "free-running mode only: the timer's rate (Hz)",
+         dict(positive=True, finite=True)),
+        ("initial_positions", DOUBLES, "the initial pose (rad), also the pose of a ~/reset "
+         "with empty positions; unset: zero clipped into the joint limits",
+         dict(additional_constraints="one value per joint")),
+        ("seed", 0, "seed passed to the simulator (which is deterministic)"),
+        ("position_gain", 0.05, "the position motors' gain (pybullet's positionGains: the "
+         "share of the position error removed per physics step; pybullet's own 0.1 can "
+         "chatter)", dict(range=(0.0, 1.0), positive=True)),
+        ("actuator", "torque", "torque mode only. torque: joint torques, with the robot file's "
+         "armature and damping; velocity_motor: V-REP's torque mode (each joint's velocity "
+         "motor towards its velocity limit, force capped at |torque|; no armature, no "
+         "damping), as in thesis ch. 5", dict(choices=ACTUATORS)),
+        ("lockstep", True, "true: lock-step, the ~/step and ~/reset services advance the "
+         "simulation; false: free-running, a timer advances it in wall time with the latest "
+         "joint_commands"),
+        ("clock_topic", "clock", "where the simulated time is published (rosgraph_msgs/Clock) "
+         "after every advance; relative names resolve in the robot's namespace; empty: not "
+         "published"),
+        ("frame_prefix", f"{namespace}/" if namespace else "", "prefix of the TF frame names "
+         "of this robot's links (as robot_state_publisher's frame_prefix), so that robots "
+         "sharing /tf keep their frames apart; default: the node's namespace without its "
+         "leading '/', then '/' (empty in the root namespace)"),
+        ("publish_tf", True, "publish the link frames on /tf after every advance (and the "
+         "world -> base link transform on /tf_static)"))
 
 
 class RobotSim(Node):
     def __init__(self):
         super().__init__("robot_sim")
-        robot = declare(self, "robot", "", "robot parameter file (scenarios/robots/*.toml) "
-                        "or a URDF file (*.urdf: its serial chain from the root link); set "
-                        "exactly one of robot and urdf")
-        urdf = declare(self, "urdf", "", "a URDF file simulated as it is, instead of robot")
-        control_mode = declare(self, "control_mode", "position",
-                               "position: commands are joint targets (rad); torque: commands "
-                               "are joint torques (N m)", choices=CONTROL_MODES)
-        physics_step = declare(self, "physics_step", 1e-3, "the pybullet time step (s)",
-                               positive=True, finite=True)
-        control_rate = declare(self, "control_rate", 100.0,
-                               "free-running mode only: the timer's rate (Hz)", positive=True,
-                               finite=True)
-        initial = declare_array(self, "initial_positions", Parameter.Type.DOUBLE_ARRAY,
-                                "the initial pose (rad), also the pose of a ~/reset with empty "
-                                "positions; unset: zero clipped into the joint limits",
-                                additional_constraints="one value per joint") or None
-        seed = declare(self, "seed", 0, "seed passed to the simulator (which is deterministic)")
-        position_gain = declare(self, "position_gain", 0.05,
-                                "the position motors' gain (pybullet's positionGains: the "
-                                "share of the position error removed per physics step; "
-                                "pybullet's own 0.1 can chatter)",
-                                range=(0.0, 1.0), positive=True)
-        actuator = declare(self, "actuator", "torque",
-                           "torque mode only. torque: joint torques, with the robot file's "
-                           "armature and damping; velocity_motor: V-REP's torque mode (each "
-                           "joint's velocity motor towards its velocity limit, force capped "
-                           "at |torque|; no armature, no damping), as in thesis ch. 5",
-                           choices=ACTUATORS)
-        self.lockstep = declare(self, "lockstep", True,
-                                "true: lock-step, the ~/step and ~/reset services advance the "
-                                "simulation; false: free-running, a timer advances it in wall "
-                                "time with the latest joint_commands")
-        clock_topic = declare(self, "clock_topic", "clock",
-                              "where the simulated time is published (rosgraph_msgs/Clock) "
-                              "after every advance; relative names resolve in the robot's "
-                              "namespace; empty: not published")
-        namespace = self.get_namespace().strip("/")
-        self.frame_prefix = declare(self, "frame_prefix", f"{namespace}/" if namespace else "",
-                                    "prefix of the TF frame names of this robot's links (as "
-                                    "robot_state_publisher's frame_prefix), so that robots "
-                                    "sharing /tf keep their frames apart; default: the node's "
-                                    "namespace without its leading '/', then '/' (empty in "
-                                    "the root namespace)")
-        publish_tf = declare(self, "publish_tf", True,
-                             "publish the link frames on /tf after every advance (and the "
-                             "world -> base link transform on /tf_static)")
+        p = declare_table(self, parameters(self.get_namespace().strip("/")))
+        self.lockstep, self.frame_prefix = p["lockstep"], p["frame_prefix"]
         describe_use_sim_time(self)
-
+        robot, urdf = p["robot"], p["urdf"]
         if bool(robot) == bool(urdf):
             raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "
                              "and 'urdf' (a URDF file)")
@@ -108,42 +100,48 @@ class RobotSim(Node):
             description = robot_urdf(load_robot_params(os.path.expanduser(robot)))
         else:
             description = Path(os.path.expanduser(urdf)).read_text()
-        self.initial = initial
-        self.sim = RobotSimulator(description, control_mode=control_mode,
-                                  physics_step=physics_step, initial_positions=initial,
-                                  seed=seed, position_gain=position_gain, actuator=actuator)
+        self.initial = p["initial_positions"] or None
+        self.sim = RobotSimulator(description, control_mode=p["control_mode"],
+                                  physics_step=p["physics_step"],
+                                  initial_positions=self.initial, seed=p["seed"],
+                                  position_gain=p["position_gain"], actuator=p["actuator"])
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
-        self.clock_pub = (self.create_publisher(Clock, clock_topic, CLOCK_QOS)
-                          if clock_topic else None)
+        self.clock_pub = (self.create_publisher(Clock, p["clock_topic"], CLOCK_QOS)
+                          if p["clock_topic"] else None)
         # The URDF, latched, as robot_state_publisher offers it; Foxglove's 3-D panel draws it
         # with the TF frames below (docs/nodes.md).
         self.create_publisher(String, "robot_description", LATCHED_QOS).publish(
             String(data=description))
         # /tf only while someone listens (a lock-step period costs less without it)
-        self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if publish_tf else None
-        if publish_tf:
+        self.tf_pub = self.create_publisher(TFMessage, "/tf", TF_QOS) if p["publish_tf"] else None
+        if p["publish_tf"]:
             self.tf_static_pub = self.create_publisher(TFMessage, "/tf_static", LATCHED_QOS)
             self.start_tf()
-        mode = "lock-step" if self.lockstep else f"free-running at {control_rate} Hz"
+        mode = self.start_mode(p["control_mode"], p["control_rate"], p["physics_step"])
+        self.get_logger().info(
+            f"simulating {robot or urdf} ({p['control_mode']} control, joints "
+            f"{self.sim.joint_names}, physics step {p['physics_step']} s), {mode}")
+        self.publish(self.sim.state())
+
+    def start_mode(self, control_mode, control_rate, physics_step):
+        """Lock-step: the ~/step and ~/reset services; free-running: a timer and the
+        joint_commands subscription. Returns the mode, as the start-up line says it."""
         if self.lockstep:
             self.create_service(StepRobot, "~/step", answering(self, "step", self.step_service))
             self.create_service(ResetRobot, "~/reset", answering(self, "reset",
                                                                  self.reset_service))
-        else:
-            if not (math.isfinite(control_rate) and control_rate > 0):
-                raise ValueError(f"control_rate must be a positive number of Hz, "
-                                 f"got {control_rate}")
-            self.substeps = max(1, round(1.0 / (control_rate * physics_step)))
-            state = self.sim.state()
-            self.command = (list(state.positions) if control_mode == "position"
-                            else [0.0] * self.sim.n_joints)
-            self.create_subscription(Float64MultiArray, "joint_commands", self.on_command, 10)
-            self.create_timer(1.0 / control_rate, self.on_timer)
-        self.get_logger().info(
-            f"simulating {robot or urdf} ({control_mode} control, joints "
-            f"{self.sim.joint_names}, physics step {physics_step} s), {mode}")
-        self.publish(self.sim.state())
+            return "lock-step"
+        if not (math.isfinite(control_rate) and control_rate > 0):
+            raise ValueError(f"control_rate must be a positive number of Hz, "
+                             f"got {control_rate}")
+        self.substeps = max(1, round(1.0 / (control_rate * physics_step)))
+        state = self.sim.state()
+        self.command = (list(state.positions) if control_mode == "position"
+                        else [0.0] * self.sim.n_joints)
+        self.create_subscription(Float64MultiArray, "joint_commands", self.on_command, 10)
+        self.create_timer(1.0 / control_rate, self.on_timer)
+        return f"free-running at {control_rate} Hz"
 
     def joint_state(self, state):
         msg = JointState()

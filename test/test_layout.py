@@ -1,4 +1,5 @@
-"""The package's architecture, checked on the source: which subpackage may import which.
+"""The package's architecture, checked on the source: which subpackage may import which, and
+the ROS layer's shape (no node imports another; short modules, functions and constructors).
 
 The transfer core imports no robot or chapter code; the robot, learner, evaluation and
 recording layers import only the core and themselves; exploration builds on those; a thesis
@@ -124,3 +125,53 @@ def test_no_top_level_function_name_means_two_things_in_the_library():
 
     assert {name: where for name, where in seen.items()
             if len(where) > 1 and not parallel(where)} == {}
+
+
+# -- the ROS layer (nodes/, the package lpa_transfer_nodes) ---------------------------------
+NODES = ROOT / "nodes"
+NODE_LAYER_FILES = sorted(NODES.glob("*.py"))
+MAX_MODULE_LINES, MAX_FUNCTION_LINES, MAX_CONSTRUCTOR_LINES = 250, 60, 40
+#: Modules still above a limit, with the size each may not exceed while it shrinks to it:
+#: (module lines, longest constructor).
+NOT_YET_WITHIN = {"goal_babbling_learner.py": (410, MAX_CONSTRUCTOR_LINES),
+                  "inverse_dynamics_learner.py": (MAX_MODULE_LINES, 60),
+                  "player.py": (MAX_MODULE_LINES, 48), "skill_learner.py": (MAX_MODULE_LINES, 46)}
+
+
+def defines_main(path):
+    return any(isinstance(node, ast.FunctionDef) and node.name == "main"
+               for node in ast.parse(path.read_text(), str(path)).body)
+
+
+NODE_MODULES = {path.stem for path in NODE_LAYER_FILES if defines_main(path)}
+
+
+def test_no_private_ros_layer_and_no_test_harness_in_the_installed_package():
+    assert not [path.name for path in NODE_LAYER_FILES if path.stem.startswith("_")
+                and path.stem != "__init__"]
+    assert not (NODES / "testing.py").exists()
+    offenders = [str(path.relative_to(ROOT))
+                 for folder in ("nodes", "scenarios", "bench", "test")
+                 for path in (ROOT / folder).rglob("*.py")
+                 if any(m.startswith("lpa_transfer_nodes._") for m in imported_modules(path))]
+    assert offenders == []
+
+
+@pytest.mark.parametrize("path", NODE_LAYER_FILES, ids=lambda p: p.name)
+def test_no_node_imports_another_node(path):
+    """Nodes share the ROS layer (the modules without main) and the library, never a node."""
+    used = {m.split(".")[1] for m in imported_modules(path)
+            if m.startswith("lpa_transfer_nodes.") and len(m.split(".")) > 1}
+    assert used & NODE_MODULES - {path.stem} == set(), path.name
+
+
+@pytest.mark.parametrize("path", NODE_LAYER_FILES, ids=lambda p: p.name)
+def test_node_layer_modules_functions_and_constructors_are_short(path):
+    module_limit, constructor_limit = NOT_YET_WITHIN.get(
+        path.name, (MAX_MODULE_LINES, MAX_CONSTRUCTOR_LINES))
+    assert len(path.read_text().splitlines()) <= module_limit, path.name
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            size = node.end_lineno - node.lineno + 1
+            limit = constructor_limit if node.name == "__init__" else MAX_FUNCTION_LINES
+            assert size <= limit, f"{path.name}: {node.name} has {size} lines, more than {limit}"
