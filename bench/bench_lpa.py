@@ -10,6 +10,14 @@ Single-threaded (OMP/OpenBLAS/MKL threads = 1, set before numpy is imported). Ca
   §5.4.2, n_init 3); transfer of the 16,800 following source points; accuracy = RMSE (N·m)
   of the transferred target torques against the true ones.
 
+* transfer of 16,800 x 20 -> 16 on several models of that size (``TRANSFER_MODELS``): the
+  same inverse-dynamics set-up on other babbling seeds, with responsibilities over 5, 10, 15
+  or 20 source columns (q; q, q̇; q, q̇, q̈; all) and 22-25 clusters, each fitted by the
+  library and the reference and transferring its seed's 16,800 held-out points. The two
+  transfers alternate, ``--transfer-repeats`` times each, so both see the same load; the
+  ratio is of their medians, of wall time and of the thread's CPU time (steadier on a
+  shared machine: time spent preempted does not count).
+
 Times are medians of ``--repeats`` runs (library) and ``--reference-repeats`` runs
 (reference), ``time.perf_counter``. After the table, the goal figures of issue "Speed" item 2,
 all from this one run: the transfer time and its ratio to the reference, and the fit ratio at
@@ -22,7 +30,7 @@ function of the share of non-negligible responsibilities: the fitted inverse-dyn
 2-link models with their covariances scaled up (more spread responsibilities), and random
 mixtures of other sizes. ``local_procrustes.dense_share`` is the rule fitted to it.
 
-Usage: ``python -m bench.bench_lpa [--quick | --crossover]``.
+Usage: ``python -m bench.bench_lpa [--quick | --crossover | --transfer-only]``.
 """
 import os
 
@@ -46,6 +54,16 @@ TWO_LINK = dict(n_min=7, c_min=1e-7, cluster_dims=[0, 1], n_init=3, random_state
 INVERSE_DYNAMICS = dict(n_min=40, c_min=1e-7, latent_dim=16, cluster_dims=list(range(10)),
                         n_init=3, random_state=0)
 MODELS = {"library": LocalProcrustesAnalysis, "reference": ReferenceLPA}
+#: Transfer models of the 16,800 x 20 size: (name, babbling seed of datasets.inverse_dynamics,
+#: LPA parameters); the first is the table's 20-D -> 16-D model.
+TRANSFER_MODELS = (
+    ("seed 0, q q̇ (cols 0-9)", 0, INVERSE_DYNAMICS),
+    ("seed 5, q q̇ (cols 0-9)", 5, INVERSE_DYNAMICS),
+    ("seed 1, q q̇ q̈ (cols 0-14)", 1, dict(INVERSE_DYNAMICS, cluster_dims=list(range(15)))),
+    ("seed 5, q (cols 0-4), n_min 35", 5,
+     dict(INVERSE_DYNAMICS, n_min=35, cluster_dims=list(range(5)))),
+    ("seed 3, all 20 cols", 3, dict(INVERSE_DYNAMICS, cluster_dims=list(range(20)))),
+)
 
 
 def median_time(function, repeats):
@@ -113,6 +131,45 @@ def run(args):
     rows.append((f"20-D -> 16-D transfer, {len(held_out)} points", transfer_s, accuracy,
                  "N·m", clusters, pa_tau))
     return rows, density
+
+
+def transfer_models(repeats):
+    """Transfer time of library and reference on each of ``TRANSFER_MODELS``, alternating:
+    rows of (name, K library/reference, library s, reference s, density)."""
+    rows = []
+    for name, seed, params in TRANSFER_MODELS:
+        data = datasets.inverse_dynamics(seed=seed)
+        fitted = {label: model(**params).fit(data["source"], data["target"])
+                  for label, model in MODELS.items()}
+        source = data["source_held_out"]
+        times = {label: [] for label in fitted}
+        cpu = {label: [] for label in fitted}
+        for _ in range(repeats):
+            for label, model in fitted.items():
+                start, start_cpu = time.perf_counter(), time.thread_time()
+                model.transfer(source)
+                times[label].append(time.perf_counter() - start)
+                cpu[label].append(time.thread_time() - start_cpu)
+        rows.append((name, (fitted["library"].n_clusters_, fitted["reference"].n_clusters_),
+                     float(np.median(times["library"])), float(np.median(times["reference"])),
+                     float(np.median(cpu["reference"]) / np.median(cpu["library"])),
+                     responsibility_density(fitted["library"], source)))
+    return rows
+
+
+def print_transfer_models(rows):
+    header = (f"{'transfer 16,800 x 20 -> 16, model':<34} {'K lib/ref':>9} {'library':>9} "
+              f"{'reference':>10} {'speed-up':>9} {'CPU':>6} {'clusters/pt':>11} {'path':>6}")
+    print("\n" + header + "\n" + "-" * len(header))
+    for name, clusters, lib, ref, cpu, (per_point, share, dense_from) in rows:
+        path = "dense" if share >= dense_from else "sparse"
+        print(f"{name:<34} {clusters[0]:>4}/{clusters[1]:<4} {_duration(lib):>9} "
+              f"{_duration(ref):>10} {ref / lib:>8.1f}x {cpu:>5.1f}x {per_point:>11.2f} "
+              f"{path:>6}")
+    ratios = [ref / lib for _, _, lib, ref, _, _ in rows]
+    print(f"transfer on every model: slowest {max(row[2] for row in rows) * 1000:.1f} ms, "
+          f"smallest speed-up {min(ratios):.1f}x by wall time, "
+          f"{min(row[4] for row in rows):.1f}x by CPU time (goal >= 8x)")
 
 
 def responsibility_density(model, source):
@@ -239,6 +296,8 @@ def main():
     parser.add_argument("--repeats", type=int, default=5, help="library fit repeats")
     parser.add_argument("--reference-repeats", type=int, default=3)
     parser.add_argument("--transfer-repeats", type=int, default=7)
+    parser.add_argument("--transfer-only", action="store_true",
+                        help="only the transfer on every model of TRANSFER_MODELS")
     args = parser.parse_args()
     args.sizes = (1000, 5000)
     if args.quick:
@@ -253,12 +312,15 @@ def main():
         if args.crossover:
             args.transfer_repeats = min(args.transfer_repeats, 3)
             crossover(args)
+        elif args.transfer_only:
+            print_transfer_models(transfer_models(args.transfer_repeats))
         else:
             ReferenceLPA(**TWO_LINK).fit(*datasets.two_link(100, seed=1))        # warm-up
             LocalProcrustesAnalysis(**TWO_LINK).fit(*datasets.two_link(100, seed=1))
             rows, density = run(args)
             print_table(rows)
             print_goals(rows, density)
+            print_transfer_models(transfer_models(args.transfer_repeats))
         print("load average (1, 5, 15 min) after: %.2f %.2f %.2f" % os.getloadavg())
 
 

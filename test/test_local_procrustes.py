@@ -5,7 +5,7 @@ from sklearn.exceptions import NotFittedError
 from sklearn.mixture import GaussianMixture
 
 from lpa_transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
-from lpa_transfer.transfer import _em_kernels, gmm, local_procrustes
+from lpa_transfer.transfer import _em_kernels, _transfer_kernels, gmm, local_procrustes
 from lpa_transfer.transfer.init_em import cluster_errors, init_em, two_means
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
 from two_link import correspondences, mapping_rmse_mm
@@ -426,6 +426,75 @@ def test_quadratic_features_are_the_upper_triangle_products():
     upper = np.triu_indices(5)
     expected = np.hstack((X[:, upper[0]] * X[:, upper[1]], X))
     assert np.array_equal(gmm.quadratic_features(X), expected)
+
+
+def numpy_sparse_transfer(source, gamma, coef, intercept):
+    """The sparse path as numpy computed it before its compiled kernels: pairs sorted by
+    cluster (stably), one BLAS product per cluster over its points, b_k added, scaled by γ,
+    a point's first term assigned and the others added in increasing k."""
+    out = np.zeros((len(source), coef.shape[1]))
+    points, components = np.divmod(np.flatnonzero(gamma >= 1e-17), gamma.shape[1])
+    weights = gamma[points, components]
+    first = np.ones(len(points), dtype=bool)
+    first[1:] = points[1:] != points[:-1]
+    order = np.argsort(components, kind="stable")
+    points, components, weights, first = (a[order] for a in (points, components, weights,
+                                                              first))
+    for k in np.unique(components):
+        block = components == k
+        rows = points[block]
+        local = source.take(rows, axis=0) @ coef[k].T
+        local += intercept[k]
+        local *= weights[block, None]
+        lead = first[block]
+        out[rows[lead]] = local[lead]
+        out[rows[~lead]] += local[~lead]
+    return out
+
+
+@pytest.mark.parametrize("dim, n_clusters", [(5, 25), (10, 22), (15, 22), (20, 24)])
+def test_compiled_transfer_is_the_numpy_transfer_bit_for_bit(dim, n_clusters, monkeypatch):
+    # Models of the bench's 20-D -> 16-D shape (bench/bench_lpa.py TRANSFER_MODELS):
+    # responsibilities over 5-20 source columns, 22-25 clusters, a few per point. The
+    # compiled responsibilities and sparse path give the numpy code's bits.
+    rng = np.random.default_rng(dim)
+    model = LocalProcrustesAnalysis()
+    model.weights_ = rng.dirichlet(np.ones(n_clusters))
+    model.means_ = rng.uniform(-1, 1, (n_clusters, dim))
+    width = 0.008 * dim                  # a few clusters per point, whatever the dimension
+    scales = rng.uniform(width, 2.4 * width, (n_clusters, 1, 1))
+    factors = scales * (np.eye(dim) + 0.3 * rng.normal(size=(n_clusters, dim, dim)) / dim)
+    model.precisions_cholesky_ = gmm.precisions_cholesky(factors @ np.swapaxes(factors, 1, 2)
+                                                         + 1e-3 * np.eye(dim))
+    model.coef_ = rng.normal(size=(n_clusters, 16, 20))
+    model.intercept_ = 5.0 + rng.normal(size=(n_clusters, 16))
+    model.cluster_dims_, model.n_clusters_ = np.arange(dim), n_clusters
+    model.n_features_in_, model.n_features_out_ = 20, 16
+    labels = rng.integers(n_clusters, size=3001)
+    source = rng.normal(size=(3001, 20))
+    source[:, :dim] = model.means_[labels] + 1.6 * width * rng.normal(size=(3001, dim))
+    transferred = model.transfer(source)
+    gamma = model.responsibilities(source)
+    kept = (gamma >= 1e-17).sum(axis=1).mean()
+    assert 1.01 < kept < local_procrustes.dense_share(20, 16, n_clusters) * n_clusters
+    monkeypatch.setattr(gmm, "_SIMD_EXP", True)              # numpy's responsibilities
+    numpy_gamma = model.responsibilities(source)
+    assert np.array_equal(gamma, numpy_gamma)
+    assert np.array_equal(transferred, numpy_sparse_transfer(source, numpy_gamma, model.coef_,
+                                                             model.intercept_))
+    log_p = gmm.log_likelihoods(source[:, :dim], model.weights_, model.means_,
+                                model.precisions_cholesky_)
+    monkeypatch.setattr(gmm, "_SIMD_EXP", False)
+    assert np.array_equal(log_p, gmm.log_likelihoods(source[:, :dim], model.weights_,
+                                                     model.means_, model.precisions_cholesky_))
+
+
+@pytest.mark.parametrize("n_components", [1, 7, 8, 9, 129, 300])
+def test_compiled_row_totals_are_numpys_pairwise_sums(n_components):
+    rng = np.random.default_rng(n_components)
+    values = np.exp(-rng.exponential(30, (40, n_components)))
+    totals = np.array([_transfer_kernels._pairwise_sum(row, n_components) for row in values])
+    assert np.array_equal(totals, values.sum(axis=1))
 
 
 @pytest.mark.parametrize("simd_exp", [False, True])

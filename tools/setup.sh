@@ -114,12 +114,13 @@ fi
 # here and cached on disk next to their modules, so that the first learner or mapping node
 # does not stall compiling them. Redone when the kernels or the requirements change.
 kernels=(lpa_transfer/learners/_lwpr_kernels.py lpa_transfer/transfer/_em_kernels.py
-         lpa_transfer/inverse_dynamics/_gcv.py)
+         lpa_transfer/transfer/_transfer_kernels.py lpa_transfer/inverse_dynamics/_gcv.py)
 kernel_hash=$( (echo "$req_hash"; sha256sum "${kernels[@]}") | digest)
 if ! up_to_date kernels "$kernel_hash" || ! ls lpa_transfer/learners/__pycache__/_lwpr_kernels*.nbi >/dev/null 2>&1 \
         || ! ls lpa_transfer/transfer/__pycache__/_em_kernels*.nbi >/dev/null 2>&1 \
+        || ! ls lpa_transfer/transfer/__pycache__/_transfer_kernels*.nbi >/dev/null 2>&1 \
         || ! ls lpa_transfer/inverse_dynamics/__pycache__/_gcv*.nbi >/dev/null 2>&1; then
-    say "compiling the LWPR, EM and spline kernels (numba, about 30 s)"
+    say "compiling the LWPR, LPA (EM, transfer) and spline kernels (numba, about 30 s)"
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 "$VENV/bin/python" - <<'PY'
 import numpy as np
 from lpa_transfer.learners.lwpr import LWPR
@@ -132,7 +133,10 @@ for params in ({}, {"meta": True, "diag_only": False}):
     model.predict(X)
     model.predict_with_confidence(X)
 from lpa_transfer import LocalProcrustesAnalysis
-LocalProcrustesAnalysis(n_min=7, c_min=1e-7).fit(rng.normal(size=(80, 2)), rng.normal(size=(80, 2)))
+source = rng.normal(size=(80, 3))
+for dims in (None, [0, 1]):       # the clustering columns: all (contiguous) or a view of some
+    lpa = LocalProcrustesAnalysis(n_min=7, c_min=1e-7, cluster_dims=dims).fit(source, source[:, :2])
+    lpa.transfer(source)
 from lpa_transfer.inverse_dynamics._gcv import smoothing_spline
 smoothing_spline(rng.normal(size=20), 0.01)
 PY

@@ -8,7 +8,7 @@ linear map). Parameters follow scikit-learn's ``GaussianMixture(covariance_type=
 """
 import numpy as np
 
-from lpa_transfer.transfer import _em_kernels
+from lpa_transfer.transfer import _em_kernels, _transfer_kernels
 from lpa_transfer.transfer.procrustes import grouped_moments
 
 _LOG_2PI = np.log(2.0 * np.pi)
@@ -44,20 +44,15 @@ def row_blocks(n_rows, row_elements):
     return [slice(start, start + step) for start in range(0, n_rows, step)]
 
 
-def quadratic_features(X):
-    """[x_i x_j for i <= j, x]: the (N, d(d+1)/2 + d) features of a quadratic form.
+def quadratic_features(X, centre=None):
+    """[x_i x_j for i <= j, x]: the (N, d(d+1)/2 + d) features of a quadratic form, of the
+    rows of X less ``centre`` if given (the same bits as of ``X - centre``).
 
     Returned column-major (a transposed view), built one contiguous column per product.
     """
-    n_rows, dim = X.shape
-    columns = np.ascontiguousarray(X.T)
-    out = np.empty((dim * (dim + 1) // 2 + dim, n_rows))
-    start = 0
-    for i in range(dim):                                  # the order of np.triu_indices(dim)
-        np.multiply(columns[i], columns[i:], out=out[start:start + dim - i])
-        start += dim - i
-    out[start:] = columns
-    return out.T
+    if centre is None:
+        centre = np.zeros(X.shape[1])
+    return _transfer_kernels.quadratic_features(X, np.asarray(centre, dtype=float)).T
 
 
 def _simd_exp():
@@ -128,28 +123,41 @@ class Responsibilities:
     def blocks(self, X, features=None):
         """Yield ``(rows, γ (R, K), log p(x) (R,))`` for consecutive blocks of rows of X.
 
-        ``features`` may hold precomputed :func:`quadratic_features` of the centred X.
+        ``features`` may hold precomputed :func:`quadratic_features` of the centred X. The
+        log-densities are one BLAS product per block; the rest of eq. 3.9 runs in compiled
+        code (:func:`_transfer_kernels.block_responsibilities`), or in numpy where numpy's exp
+        is SIMD code (:func:`_simd_exp`), whose bits the C library's exp would not match.
         """
         width = max(len(self.constant), len(self.coefficients))
         for rows in row_blocks(len(X), width):
             with np.errstate(over="ignore", invalid="ignore"):   # far points: handled below
-                block = (quadratic_features(X[rows] - self.centre) if features is None
+                block = (quadratic_features(X[rows], self.centre) if features is None
                          else features[rows])
                 weighted = block @ self.coefficients
-                weighted += self.constant
-            far = ~np.isfinite(weighted).all(axis=1)
-            if far.any():
-                weighted[far] = 0.0               # set below, from the rescaled distances
-            peak = weighted.max(axis=1, keepdims=True)
-            weighted -= peak
-            resp = _floored_exp(weighted)
-            total = resp.sum(axis=1, keepdims=True)
-            resp /= total
-            log_norm = peak[:, 0] + np.log(total[:, 0])
+            if _SIMD_EXP:
+                resp, log_norm, far = self._numpy_block(weighted)
+            else:
+                far, peak, total = _transfer_kernels.block_responsibilities(
+                    weighted, self.constant, _LOG_FLOOR, _EXP_FLOOR)
+                resp, log_norm = weighted, peak + np.log(total)
             if far.any():
                 start = rows.start if isinstance(rows, slice) else 0
                 resp[far], log_norm[far] = self._far(X[start + np.flatnonzero(far)])
             yield rows, resp, log_norm
+
+    def _numpy_block(self, weighted):
+        """γ, log p(x) and the far rows of a block from its log-densities less the constant,
+        in numpy: what :func:`_transfer_kernels.block_responsibilities` computes."""
+        weighted += self.constant
+        far = ~np.isfinite(weighted).all(axis=1)
+        if far.any():
+            weighted[far] = 0.0               # set by the caller, from the rescaled distances
+        peak = weighted.max(axis=1, keepdims=True)
+        weighted -= peak
+        resp = _floored_exp(weighted)
+        total = resp.sum(axis=1, keepdims=True)
+        resp /= total
+        return resp, peak[:, 0] + np.log(total[:, 0]), far
 
     def _far(self, X):
         """γ and log p(x) of finite points so far from the mixture that the expanded quadratic

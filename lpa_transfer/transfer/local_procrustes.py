@@ -10,7 +10,7 @@ import numpy as np
 
 from lpa_transfer import _validation as check
 from lpa_transfer._estimator import Estimator
-from lpa_transfer.transfer import gmm
+from lpa_transfer.transfer import _transfer_kernels, gmm
 from lpa_transfer.transfer.init_em import init_em
 from lpa_transfer.transfer.model_io import SavableModel
 from lpa_transfer.transfer.procrustes import grouped_moments, procrustes_maps
@@ -222,14 +222,15 @@ def mix_local_maps(source, gamma_blocks, coef, intercept, path=None):
     stacked = None
     crossover = dense_share(source.shape[1], intercept.shape[1], len(coef))
     for rows, gamma in gamma_blocks:
-        kept = gamma >= _NEGLIGIBLE_RESPONSIBILITY
-        pairs = np.flatnonzero(kept) if path != "dense" else None
-        if path == "dense" or (path is None and len(pairs) >= crossover * kept.size):
+        gamma = np.ascontiguousarray(gamma)
+        n_kept = _transfer_kernels.count_at_least(gamma, _NEGLIGIBLE_RESPONSIBILITY)
+        if path == "dense" or (path is None and n_kept >= crossover * gamma.size):
             if stacked is None:
                 stacked = _stacked_maps(coef, intercept)
-            _dense_block(source[rows], np.where(kept, gamma, 0.0), stacked, out[rows])
+            weights = np.where(gamma >= _NEGLIGIBLE_RESPONSIBILITY, gamma, 0.0)
+            _dense_block(source[rows], weights, stacked, out[rows])
         else:
-            sparse.add(rows, gamma, pairs)
+            sparse.add(rows, gamma, n_kept)
     sparse.flush()
     return out
 
@@ -303,6 +304,8 @@ class _SparseTerms:
     and target values have gathered (and at the end): sorted by cluster, each f_k is one
     matrix product over its points. The clusters are taken in increasing k, so each point's
     weighted terms reach its row in increasing k: the first is assigned, the others added.
+    Collection, sort and weighted sums are compiled (:mod:`._transfer_kernels`); the
+    products stay BLAS calls over the same points as ever, which fixes their rounding.
     """
 
     def __init__(self, source, coef, intercept, out):
@@ -310,14 +313,18 @@ class _SparseTerms:
         self.capacity = _sparse_capacity(source.shape[1], intercept.shape[1], len(coef))
         self.pending, self.size = [], 0
 
-    def add(self, rows, gamma, pairs):
-        """Collect the pairs of a block: ``rows`` (a slice), γ (R, K) and ``pairs``, the flat
-        indices of γ's entries ≥ 1e-17 (point-major, so increasing k within a point)."""
-        if len(pairs) == 0:
+    def add(self, rows, gamma, n_kept):
+        """Collect the pairs of a block: ``rows`` (a slice), γ (R, K, C-contiguous) and
+        ``n_kept``, the number of its entries ≥ 1e-17 (taken point by point in increasing
+        k)."""
+        if n_kept == 0:
             return
-        points, components = np.divmod(pairs, gamma.shape[1])
-        self.pending.append((points + rows.start, components, gamma.reshape(-1)[pairs]))
-        self.size += len(pairs)
+        pairs = (np.empty(n_kept, dtype=np.intp), np.empty(n_kept, dtype=np.intp),
+                 np.empty(n_kept))
+        _transfer_kernels.collect_pairs(gamma, _NEGLIGIBLE_RESPONSIBILITY, rows.start or 0,
+                                        *pairs, 0)
+        self.pending.append(pairs)
+        self.size += n_kept
         if self.size >= self.capacity:
             self.flush()
 
@@ -325,29 +332,17 @@ class _SparseTerms:
         """Evaluate the collected pairs and write their terms to their points' rows of ``out``."""
         if not self.pending:
             return
-        points, components, gamma = (np.concatenate(parts) for parts in zip(*self.pending))
+        points, components, gamma = (parts[0] if len(parts) == 1 else np.concatenate(parts)
+                                     for parts in zip(*self.pending))
         self.pending, self.size = [], 0
-        first = np.ones(len(points), dtype=bool)          # a point's pair with the smallest k
-        first[1:] = points[1:] != points[:-1]
-        n_clusters = len(self.coef)
-        # A stable sort by cluster (a radix sort for 16-bit keys). The clusters are then taken
-        # in increasing k, so each point's terms are added in increasing k.
-        keys = components.astype(np.int16) if n_clusters <= np.iinfo(np.int16).max else components
-        order = np.argsort(keys, kind="stable")
-        bounds = np.searchsorted(components[order], np.arange(n_clusters + 1))
-        points, gamma, first = points[order], gamma[order], first[order]
+        points, gamma, bounds, first = _transfer_kernels.sort_by_cluster(
+            points, components, gamma, len(self.coef))
         for k in np.flatnonzero(bounds[1:] > bounds[:-1]):
             block = slice(bounds[k], bounds[k + 1])
             rows = points[block]                              # each point at most once
-            local = self.source.take(rows, axis=0) @ self.coef[k].T       # f_k(z_s)
-            local += self.intercept[k]
-            local *= gamma[block, None]
-            lead = first[block]
-            if lead.all():
-                self.out[rows] = local
-            else:
-                self.out[rows[lead]] = local[lead]
-                self.out[rows[~lead]] += local[~lead]
+            local = self.source.take(rows, axis=0) @ self.coef[k].T       # W_k z_s
+            _transfer_kernels.blend(local, rows, gamma[block], first[block],
+                                    self.intercept[k], self.out)
 
 
 def _cluster_members(space, weights, means, precisions, n_min):
