@@ -40,7 +40,7 @@ ch6:         # thesis §6.5.1 (Table 6.1), 10 seeds, into runs/goal_babbling/
 ch6-nao-poppy:   # thesis §6.5.2 (Nao -> Poppy), 10 seeds, into runs/nao_poppy/
 	$(RUN) scenarios/goal_babbling/run.sh --config scenarios/goal_babbling/nao_poppy.yaml --out runs/nao_poppy $(ARGS)
 
-ch6-nao-poppy-zup:   # §6.5.2 in the thesis' z-up scene (issue 27), 10 seeds, into runs/nao_poppy_zup/
+ch6-nao-poppy-zup:   # §6.5.2 in the thesis' z-up scene, 10 seeds, into runs/nao_poppy_zup/
 	$(RUN) scenarios/goal_babbling/run.sh --config scenarios/goal_babbling/nao_poppy.yaml --override scenarios/goal_babbling/nao_poppy_zup.yaml --out runs/nao_poppy_zup $(ARGS)
 
 multi-host:  # the 2-link graph over three network namespaces (root), into runs/multi_host/

@@ -23,7 +23,7 @@ export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
 export MKL_NUM_THREADS=${MKL_NUM_THREADS:-1}
 # OpenBLAS picks its kernels by CPU, and their rounding differs: a learner trial gave 5.18 mm
-# with the Haswell kernels and 5.72 mm with the Prescott ones (measured on 2026-12-03). The
+# with the Haswell kernels and 5.72 mm with the Prescott ones. The
 # online learners amplify such differences, so pin one kernel set (AVX2 + FMA, which most
 # x86-64 hosts have) for results that repeat from one machine to the next; numpy's own SIMD
 # loops likewise stop at AVX2 (an AVX-512 host would dispatch others).

@@ -1,40 +1,17 @@
 """Correspondences between two robots collected by babbling, and their files.
 
 A correspondence pairs a source-robot point with a target-robot point (thesis ch. 3, §3.1).
-The collector drives both robots (anything with ``step(command, n_steps) -> state``, the
-state having ``time``, ``positions``, ``velocities``, ``efforts``, ``end_effector`` like
-:class:`lpa_transfer.robots.simulator.SimState`) through one :class:`~lpa_transfer.exploration.babbling.BabblingProgram`
-and pairs their samples by one of three rules — each thesis domain uses a different one:
-
-* ``"same_command"``: the target executes the source's joint commands on their common
-  joints (the first min(n_s, n_t)); other joints stay at home. §3.6 pairs the two 2-link
-  robots at equal joint angles; §6.4.2's guided exploration runs the same commands on both.
-  Joint-line waypoints are drawn inside the intersection of the two robots' joint limits.
-* ``"same_time_index"``: each robot runs the program in its own space (joint lines scaled to
-  its own limits, or the same task lines through its own inverse kinematics) and sample i of
-  the source pairs with sample i of the target (§5.4.1).
-* ``"same_task_point"``: the source runs the program; after each of its samples the target
-  is sent, by its inverse kinematics, to the point the source's end effector reached (plus
-  ``task_offset``, the target's frame relative to the source's); §4.4.2.
-
-A pair is made true for any robot pair, not only for the thesis' (:class:`PairCheck`): with
-``same_command`` and ``same_task_point`` each commanded robot settles, by its state, before it
-is sampled, and every pair is checked under its rule; failing pairs are dropped or retried,
-and too many end the collection with a :class:`PairingError`.
-
-Each sample is the robot's state after (at least) ``steps_per_sample`` physics steps, as the
-concatenation of ``features``: ``position``, ``velocity``, ``acceleration`` (backward
-difference of velocities over the clock's difference rounded to 1 ns: the difference of two
-float clock readings carries a rounding error that grows with the time already run, and
-LWPR's online learning magnifies such last-digit differences into different curves, so a
-seed's run would depend on what the simulator ran before it), ``effort`` (one value per
-joint) and ``ee_x``/``ee_y``/``ee_z`` (end-effector coordinates). The default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain
-z = (q, x) of a planar arm.
-
-Guided exploration (§6.4.2, Alg. 7) is the fourth way, with its own pairing:
-:func:`collect_guided_correspondences` lets the target goal-babble (Alg. 6) on the joints it
-shares with the source, then the source takes the postures the target reached; pair i is
-each robot's observed (q̄, x) for movement i (pairing rule ``same_command``, checked alike).
+The collector drives both robots (anything with ``step(command, n_steps) -> state`` like
+:class:`lpa_transfer.robots.simulator.SimState`) through one babbling program and pairs their
+samples by one of the rules the thesis' domains use: ``"same_command"`` (§3.6, and §6.4.2's
+guided exploration, :func:`collect_guided_correspondences`), ``"same_time_index"`` (§5.4.1)
+or ``"same_task_point"`` (§4.4.2). A pair is made true for any robot pair, not only for the
+thesis' (:class:`PairCheck`): each commanded robot settles, by its state, before it is
+sampled, every pair is checked under its rule, and too many failing pairs end the collection
+with a :class:`PairingError`. Each sample is the concatenation of ``features`` of the robot's
+state (``position``, ``velocity``, ``acceleration``, ``effort``, ``ee_x``/``ee_y``/``ee_z``);
+the default (``position``, ``ee_x``, ``ee_y``) is §3.6's domain z = (q, x) of a planar arm.
+The rules and features in detail: docs/library.md, "Correspondences".
 """
 import copy
 import os

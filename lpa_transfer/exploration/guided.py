@@ -6,31 +6,13 @@ T_guided with goal babbling (Alg. 6) moving only those joints, the others held a
 values; the source then executes the same sequence of shared commands q̄ on its own body,
 its other joints at its home (Alg. 7). Pairing the two by command gives the correspondences
 {(q̄, x_s)} and {(q̄, x_t)} in R^{d_c + m} from which a domain mapping f is learned (§6.4.1).
-On simulated robots (:mod:`lpa_transfer.robots.environment`) a robot lags its command at
-goal babbling's pace, and two bodies lag differently; which command the source executes
-(``source_follows``; Alg. 7 does not say, on its kinematic robots the two are equal):
-
-* ``"reached"`` (default): the joint positions the target reached, so that both rows of a
-  pair are at the same q̄ (§6.5.1: "correspondences are easily defined in their original
-  motor spaces"), the source's posture settling where its environment lets it (e.g.
-  :class:`lpa_transfer.exploration.correspondences.SettlingStep`);
-* ``"command"``: the command the target was sent; both robots lag it, each its own way, so
-  a pair can join postures apart (up to 0.6 rad on the chapter 6 arms at 10 movements a
-  second; experiment1_diagnosis in the chapter 6 reference results).
-
-Which range the target explores (``target_range``; Alg. 7 does not say):
-
-* ``"shared"``: the intersection of both robots' ranges of the shared joints, so that both
-  bodies execute every command exactly and every pair is a correspondence.
-* ``"own"``: the target's own ranges. The source executes each command clipped into the
-  shared ranges (as a position-controlled robot clips a command beyond its limits); only the
-  pairs whose command lay inside them are correspondences (``followed``), while every
-  movement stays the target's own experience. Where the target's range is wider (Poppy's
-  elbow bends to 148°, Nao's to 88.5°, §6.5.2), the target then learns that part of its
-  body during guided exploration instead of waiting for it.
-
-Transferred source data hold only the d_c shared joints; :func:`pad_transferred` completes
-them with the target's home values for the joints the source lacks (§6.4.1).
+Alg. 7 leaves two choices open, and simulated robots lag their commands: ``source_follows``
+(``"reached"``, the default: the source takes the joint positions the target reached, so
+both rows of a pair are at the same q̄; ``"command"``: the command the target was sent) and
+``target_range`` (``"shared"``: both robots' common ranges; ``"own"``: the target's own,
+the pairs whose command lay outside the shared ranges then not followed). Both in detail:
+docs/library.md, "Guided exploration". :func:`pad_transferred` completes transferred source
+data with the target's home values for the joints the source lacks (§6.4.1).
 """
 from typing import NamedTuple
 

@@ -1,61 +1,19 @@
-"""Diagnosis of experiment 1 (thesis §6.5.1, issue 27): why plain LPA transfer ends below
-goal babbling from scratch.
+"""Diagnosis of experiment 1 (thesis §6.5.1): why plain LPA transfer ends below goal
+babbling from scratch.
 
 The thesis (§6.5.1): "transfer with LPA is beneficial with respect to the final learning
-performance when applied at 180 seconds and beyond. This is because at 180 seconds there is
-enough correspondence data collected by the target robot and LPA achieves a better transfer
-accuracy when given more data." Its discussion (§6.6): "regression is performed on all data
-saved in memory and equal weights are assigned to all data".
-
-Everything here runs in process on the analytic kinematics (no robot_sim lag), built like
-``scenarios/goal_babbling/run_experiment.py`` builds a condition over the node graph:
-
-* scratch: the target goal-babbles (Alg. 6) with ``derived_seeds(seed)[1]`` for
-  ``total_seconds``;
-* transfer at T_guided: guided exploration (Alg. 7) with the same babbling seed for T_guided s
-  (:func:`guided_rows`); LPA (or PA) fitted on its correspondences; the source's 1000 s of
-  experience (``experiment.source_experience``) mapped (§6.4.1); a fresh K = 3 k-NN learns the
-  guided rows, then the transferred rows (weight 1, as the thesis); a new babbler with
-  ``derived_seeds(seed)[3]`` (the learner node restarts its babbler) runs for the rest of the
-  time, evaluated every ``interval`` s on the grid (:func:`run_transfer_condition`).
-
-Measured per condition (:class:`NeighbourLog`): which of the k-NN's neighbours are
-transferred samples, in goal-babbling queries (one point) and in evaluation queries (the
-grid), and the reaching rate of grid points split by the accuracy of their transferred
-neighbours. :func:`transfer_accuracy` gives the transferred samples' error against the
-target's true forward kinematics (RobMech 2019 reports the share within 10 mm).
-
-Variants of which rows are transferred (``variant`` of :func:`transferred_rows`):
-
-* ``plain``: all of ξ_s (the project's graph default);
-* ``from_guided``: only ξ_s after T_guided (as §6.5.2 transfers Nao's 600-5000 s);
-* ``synthesized``: ξ_s "synthesized from its learned models" (§6.4; §6.5: "we can synthesize
-  its experience data"): the source's final inverse model queried on a grid over its task box
-  (spacing ``synth_spacing``), each command executed on the source;
-* ``oracle_exact`` (diagnostic, not a reading): the transferred commands with the target's
-  true positions — LPA without mapping error;
-* ``oracle_filter_<mm>`` (diagnostic; RobMech 2019 filters by an error threshold): only rows
-  whose mapping error is at most <mm> mm;
-* ``matched_pairs_<rad>``: plain rows, LPA fitted only on the correspondences whose two arms
-  reached joint positions within <rad> of each other (Alg. 7 pairs by command; with lag the
-  arms may be apart; §6.5.1: "correspondences are easily defined in their original motor
-  spaces");
-* ``reached``: plain rows, guided exploration as the collector runs it by default: the source
-  takes the posture the target reached and settles there (``source_follows="reached"``,
-  :class:`lpa_transfer.exploration.correspondences.SettlingStep`), and pairs whose shared
-  joints still differ by more than :class:`PairCheck`'s tolerance are dropped;
-* ``weighted_<w>``: plain rows with k-NN weight w (the §6.6 suggestion "weighting transferred
-  data less"; no retirement).
-
-Physics (``physics``: a pair of robot files, e.g. the scenario's goal_babbling_{source,target}
-.toml): the source's babbling, guided exploration and the target's babbling then run on
-pybullet :class:`lpa_transfer.robots.simulator.RobotSimulator` arms in position mode, 100
-physics steps of 1 ms a movement, reset to home before every run, as robot_sim does over the
-graph (the learners then learn the joint positions reached, which may lag the command, and
-guided exploration pairs the joints each arm reached); evaluation stays on the analytic
-kinematics, as the learner node's. ``physics=None``: the analytic kinematics throughout.
-
-All random choices come from the run seed (``seeds.derived_seeds``) or fixed seeds.
+performance when applied at 180 seconds and beyond ... LPA achieves a better transfer
+accuracy when given more data"; its discussion (§6.6): "regression is performed on all data
+saved in memory and equal weights are assigned to all data". To see which it is, everything
+here runs in process, built like ``scenarios/goal_babbling/run_experiment.py`` builds a
+condition over the node graph (scratch; transfer at T_guided: guided exploration, the
+mapping, the source's experience mapped into a fresh k-NN, then goal babbling), instrumented:
+:class:`NeighbourLog` records which of the k-NN's neighbours are transferred samples, and
+:func:`transfer_accuracy` their error against the target's true forward kinematics. Variants
+of which rows are transferred and how (``variant`` of :func:`transferred_rows`: plain, only
+after T_guided, synthesized, oracles, matched pairs, reached postures, weighted) and the
+optional pybullet physics: docs/library.md, "Diagnosis of chapter 6's experiment 1". All
+random choices come from the run seed (``seeds.derived_seeds``) or fixed seeds.
 """
 from functools import lru_cache
 
@@ -126,8 +84,8 @@ def guided_rows(config, seed, seconds, physics=None, source_follows="command"):
     """Guided exploration (Alg. 7, §6.4) of ``seconds`` s with the target's babbling seed
     (``derived_seeds(seed)[1]``, as run.sh's collector): a GuidedPairs. Shorter T_guided are
     prefixes of the longest (deterministic), as the graph uses them. ``source_follows``
-    "command" is the collector before 2026-12-06 (the tables of the diagnosis); "reached"
-    its default since: the source settles on the target's reached posture, and the pairs
+    "command" is the collector's earlier behaviour (the tables of the diagnosis); "reached"
+    its default: the source settles on the target's reached posture, and the pairs
     apart by more than :class:`PairCheck`'s tolerance are not followed (dropped)."""
     reached = source_follows == "reached"
     target = environment(config, "target", physics)

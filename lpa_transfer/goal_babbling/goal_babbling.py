@@ -7,41 +7,15 @@ real robot may stand behind it), the sensorimotor model
 (:class:`lpa_transfer.learners.sensorimotor.SensorimotorModel`) and the exploration strategy
 (:class:`GoalBabbling`, with its noise :class:`ExplorationNoise`).
 
-One movement of Alg. 6: a goal x_g is drawn uniformly in ``x_bounds``; T sub-targets lead to it
-on the straight line from the position x_0 where the movement starts,
-x_t = (1 − t/T)·x_0 + (t/T)·x_g, t = 1..T (:func:`subtargets`). The thesis' printed formula,
-"x_t* = (T−t)/T·x_g + t/T·x_{t−1}", is garbled in the text we have; its words, "a linear
-sequence between the current robot position x_0 and the goal x_g", are what is implemented,
-ending at x_T = x_g. Each step commands q_t = L⁻¹(x_t) + E_t(x_t), clipped into the joint
-limits, executes it, and updates the model with the observed (q, x) — x the observed position,
-not the sub-target; q the command, or, on a robot that does not reach every command within a
-step (a simulated one in position mode, :mod:`lpa_transfer.robots.environment`), the joint
-positions it reached.
-
-Exploration noise (eq. 6.1, after Rolf et al. 2011): E_t(x*) = A_t x* + b_t, a random linear
-function of the (sub-)target, A_t ∈ R^{d×m}, b_t ∈ R^d. Its entries start i.i.d. N(0, σ²)
-and follow a normalised random walk: every step each entry e becomes
-(e + δ)/sqrt(1 + σ_Δ²/σ²) with δ ~ N(0, σ_Δ²), which keeps each entry's variance at σ² while
-consecutive functions stay close (correlation (1 + σ_Δ²/σ²)^(−k/2) after k steps). The
-thesis gives no values; ours are ``sigma`` = 0.1 (rad, and rad per m for A: about 0.1 rad of
-noise per joint for targets within ~1 m of the base) and ``drift`` = 0.01 (correlation 0.995
-per step, half-life ~140 steps ≈ 14 movements of T = 10). The noise is a function of the
-sub-target x_t (Rolf et al.'s E_t(x*_t)), so within a movement it perturbs the inverse model
-by a consistent, slowly changing linear map rather than by jitter.
-
-Returns home (Rolf et al. 2011; not in Alg. 6): after a goal movement, with probability
-``p_home`` (default 0.1; 0 switches them off) the next movement brings the robot back to
-q_home on a straight line in joint space in T steps, without noise. Its samples are real
-experience and are learned like all others. This keeps exploration anchored at the home
-posture, from which it spreads (§6.3.1).
-
-Time: the thesis runs goal babbling for simulated seconds (1000 s for the 2-link arms, 5000 s
-for Poppy) in V-REP without saying how many samples a second yields. ``steps_per_second``
-(default 10) fixes it: V-REP's default simulation step is 50 ms, and we assume a commanded
-posture is reached and observed within two of them. So 1000 s are 10 000 samples.
-
-Randomness: goals and home returns draw from one stream, the noise from another, both from
-``numpy.random.SeedSequence(seed)``; the same seed gives the same run bit for bit.
+One movement of Alg. 6: a goal x_g is drawn uniformly in ``x_bounds``; T sub-targets lead to
+it on the straight line from where the movement starts; each step commands the inverse
+model's answer plus exploration noise (eq. 6.1, a slowly drifting random linear function of
+the sub-target), clipped into the joint limits, and the model learns the observed (q, x).
+With probability ``p_home`` a movement returns home instead (Rolf et al. 2011; not in
+Alg. 6). ``steps_per_second`` fixes the samples per simulated second, which the thesis does
+not give. The sub-targets, the noise's random walk, the home returns and our values for what
+the thesis leaves open: docs/library.md, "Goal babbling". The same seed gives the same run
+bit for bit.
 """
 import numpy as np
 

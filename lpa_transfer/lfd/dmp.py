@@ -3,41 +3,17 @@
 The thesis encodes each transferred joint trajectory q̂_{1:T} as a DMP, one transformation
 system per joint with a common phase x and time constant τ:
 
-    τ ż = α_z (β_z (q_g − q) − z) + g(x)        (eq. 4.1)
-    τ q̇ = z                                     (eq. 4.2)
-    τ ẋ = −α_x x,  x(0) = 1                      (eq. 4.3)
-    g(x) = x Σ_i w_i Ψ_i(x) / Σ_i Ψ_i(x)         (eq. 4.4)
-    Ψ_i(x) = exp(−h_i (x − c_i)²)                (eq. 4.5)
+    τ ż = α_z (β_z (q_g − q) − z) + g(x),   τ q̇ = z,   τ ẋ = −α_x x    (eq. 4.1-4.3)
+    g(x) = x Σ_i w_i Ψ_i(x) / Σ_i Ψ_i(x),   Ψ_i(x) = exp(−h_i (x − c_i)²)  (eq. 4.4-4.5)
 
-Eliminating z = τ q̇ gives τ² q̈ = α_z (β_z (q_g − q) − τ q̇) + g(x), which is the
-transformation system of :class:`movement_primitives.dmp.DMP` (Fabisch, DFKI; BSD-3) with
-α_y = α_z, β_y = β_z and forcing term f = g. Its forcing term is eq. 4.4 exactly: x times the
-normalised RBF mixture, with no (q_g − q_0) amplitude factor (Ijspeert et al. 2013 have one,
-the thesis does not). The library fixes the rest, which the thesis leaves open:
-
-* α_x = −ln 0.01 ≈ 4.61, so the phase is 0.01 at t = τ; x(t) = exp(−α_x t/τ) is eq. 4.3
-  solved analytically (the thesis keeps it a differential equation only for phase stopping,
-  which is not used here).
-* N centres c_i = x(iτ/(N−1)), evenly spaced in time; h_i such that Ψ_i is 0.8 at c_{i+1}.
-* Fit ("τ ... set to the duration of the movement, q_g to the final configuration", §4.4.4):
-  velocities and accelerations of each demonstration by central finite differences
-  (``numpy.gradient``), the last ones set to 0; the target forcing term
-  τ² q̈ − α_z (β_z (q_g − q) − τ q̇) at every sample; the weights by ridge regression on all
-  samples (coefficient ``regularization``, 0 = least squares). ``fit_many`` learns one DMP
-  from several demonstrations, as §4.5.2 does ("We learned a DMP model from the 5
-  transferred demonstrations for each letter" and "reproduce the first demonstration"): τ is
-  their mean duration, each demonstration's times are rescaled to [0, τ] so the phases line
-  up, its targets use its own q_0 and q_g, and one regression runs on the samples of all of
-  them; start and goal are the first demonstration's. ``fit`` is ``fit_many`` on one
-  demonstration, which is the library's ``DMP.imitate``.
-* Reproduction: the ODE integrated over the requested sample times, one RK4 step per interval
-  (``integrator="rk4"``) or Euler with 1 ms internal steps (``"euler"``).
-
-Our defaults: α_z = 25 and β_z = α_z/4 (the thesis' critically damped α_z = 4β_z; the values
-are the library's), N = 30 weights per joint (the thesis gives none). After t = τ the phase is
-still 0.01, so with large weights the motion can leave the goal after τ before settling on it
-(it is a point attractor only as x → 0); reproductions over the demonstrated duration are
-unaffected.
+Eliminating z = τ q̇ gives the transformation system of :class:`movement_primitives.dmp.DMP`
+(Fabisch, DFKI; BSD-3) with α_y = α_z, β_y = β_z and forcing term f = g: eq. 4.4 exactly,
+with no (q_g − q_0) amplitude factor (Ijspeert et al. 2013 have one, the thesis does not).
+``fit_many`` learns one DMP from several demonstrations, as §4.5.2 does ("We learned a DMP
+model from the 5 transferred demonstrations for each letter"): their phases aligned, one
+ridge regression over all their samples. What the thesis leaves open (α_x, the centres and
+widths, the derivatives, the integrator) and our defaults (α_z = 25, β_z = α_z/4, N = 30
+weights per joint): docs/library.md, "DMPs".
 """
 import numpy as np
 from movement_primitives.dmp import DMP

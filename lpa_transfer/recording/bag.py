@@ -1,6 +1,6 @@
 """ROS 2 bags as MCAP files, laid out as rosbag2's MCAP storage plugin writes them.
 
-rosbag2 itself is not available as a wheel (shared/notes/ros2-from-pypi.md), so the recorder and
+rosbag2 itself is not available as a wheel (ROS 2 comes from PyPI here), so the recorder and
 player nodes use this module. The layout follows rosbag2 so that other tools read the files:
 profile ``ros2``; one schema per message type, named ``pkg/msg/Type``, encoding ``ros2msg``,
 holding the complete definition text (the type's ``.msg`` followed by every nested type's

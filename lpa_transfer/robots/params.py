@@ -1,69 +1,20 @@
 """Robot parameter files (TOML): fixed-base serial chains of revolute joints.
 
-A file is one of two kinds; both load into one :class:`RobotParams`.
+A file is one of two kinds; both load into one :class:`RobotParams`. ``kind = "planar"`` (the
+default) is a planar chain as in the thesis' Table 3.1 (§3.6): one ``[[links]]`` (length,
+optional mass) and one ``[[joints]]`` (limits, optional effort, velocity, armature, damping)
+table per link; :func:`planar_chain_fields` derives the general fields (joints about z, thin
+uniform rods, moving in the simulator's vertical x-y plane). ``kind = "serial"`` is a general
+chain, each value as in a URDF (frames, rad, m, kg, kg·m²): an optional ``[base]``, a
+``[[joints]]`` (xyz, rpy, axis, limits) and a ``[[links]]`` (mass, com, inertia) table per
+joint, and a ``[tool]``. ``extends = "other.toml"`` starts from another file's table.
 
-``kind = "planar"`` (the default): a planar chain as in the thesis' Table 3.1 (§3.6)::
-
-    name = "two_link_source"
-    source = "Makondo, PhD thesis, §3.6, Table 3.1 (source robot)"
-    [[links]]
-    length = 0.3          # m
-    mass = 0.6            # kg, optional, default DEFAULT_LINK_MASS (1 kg)
-    [[joints]]
-    lower = 0.0           # rad
-    upper = 1.5707963
-    effort = 10.0         # N·m, optional, default DEFAULT_EFFORT_LIMIT (100 N·m)
-    velocity = 3.0        # rad/s, optional, default DEFAULT_VELOCITY_LIMIT (100 rad/s)
-    armature = 0.0        # kg·m², optional, default 0 (see "Drive" below)
-    damping = 0.0         # N·m·s/rad, optional, default 0
-
-one ``[[joints]]`` table per ``[[links]]`` table (joint i moves link i). The general fields
-below are derived from it (:func:`planar_chain_fields`): joints turn about z, link i is a
-thin uniform rod along its x axis, so the chain moves in the x-y plane of the simulator,
-whose gravity points along −y (:func:`lpa_transfer.robots.planar_chain.load_fixed_robot`).
-
-A file may start from another: ``extends = "other.toml"`` (relative to the file) takes that
-file's table and replaces its top-level keys by this file's, e.g. the same arm with another
-``[base]`` placement (``scenarios/robots/poppy_right_arm_zup.toml``).
-
-``kind = "serial"``: a general chain, each value as in a URDF (frames, rad, m, kg, kg·m²)::
-
-    name = "youbot_arm"
-    source = "where the numbers come from (documents, URLs, commits)"
-    kind = "serial"
-    [base]                        # optional: placement of the chain in the world frame
-    xyz = [0.0, 0.0, 0.0]
-    rpy = [-1.5707963267948966, 0.0, 0.0]   # z-up robot -> the simulator's y-up world
-    [[joints]]                    # joint i, frame relative to the frame of joint i - 1
-    xyz = [0.024, 0.0, 0.096]     # origin (the base frame for the first joint)
-    rpy = [0.0, 0.0, 0.0]         # optional, default zeros
-    axis = [0.0, 0.0, -1.0]       # turning axis in the joint frame (normalised)
-    lower = -2.96                 # rad
-    upper = 2.93
-    effort = 100.0                # N·m
-    velocity = 1.5707963          # rad/s
-    armature = 0.225              # kg·m², optional, default 0 (see "Drive" below)
-    damping = 1.0                 # N·m·s/rad, optional, default 0
-    [[links]]                     # link i, moved by joint i, in the frame of joint i
-    mass = 1.39
-    com = [0.01489, 0.00213, 0.00213]
-    inertia = { ixx = 0.0029525, ixy = 0.0, ixz = 0.0, iyy = 0.0060091, iyz = 0.0, izz = 0.0058821 }
-    [tool]                        # the end effector, in the frame of the last joint
-    xyz = [0.004, 0.0, 0.046]
-    rpy = [0.0, 0.0, 0.0]         # optional
-
-Drive (both kinds, optional per joint, default 0, finite and >= 0): ``armature`` is the motor
-rotor's inertia reflected through the gearbox, J_rotor·N² for gear ratio N:1 (kg·m² about the
-joint axis; kg for a prismatic joint), which adds to the joint-space inertia M(q)_ii; ``damping``
-is viscous joint friction, τ = −damping·q̇. Geared joints are dominated by these: the youBot's
-wrist-roll link has 7e-5 kg·m² about its axis, its motor 35 g·cm² × 71² = 0.018 kg·m².
-:func:`lpa_transfer.robots.serial_chain.serial_chain_urdf` writes them into the URDF and
-:class:`lpa_transfer.robots.simulator.RobotSimulator` applies them (its module docstring says how).
-
-Frames compose as in URDF: frame_i = frame_{i-1} · T(xyz_i) · R(rpy_i) · Rot(axis_i, q_i), with
-R(r, p, y) = Rz(y) Ry(p) Rx(r). Inertias are about the centre of mass, axes of the link frame;
-they must be positive definite and satisfy the triangle inequalities of a rigid body.
-Unknown keys are ignored, so files can carry notes; errors name the file and the key.
+Drive (both kinds, per joint, default 0): ``armature`` (the motor rotor's inertia reflected
+through the gearbox, J_rotor·N²) and ``damping`` (viscous friction), which dominate geared
+joints; :class:`lpa_transfer.robots.simulator.RobotSimulator` applies them. Frames compose as
+in URDF. Unknown keys are ignored, so files can carry notes; errors name the file and the
+key. Both formats with examples, the drive model and the frame conventions: docs/library.md,
+"Robot files".
 """
 import dataclasses
 import numbers
@@ -290,7 +241,7 @@ def _planar_fields(data, path):
 
 
 def _drive_fields(joints, wheres):
-    """The optional ``armature`` and ``damping`` of each joint (module docstring, "Drive")."""
+    """The optional ``armature`` and ``damping`` of each joint (docs/library.md, "Robot files")."""
     return dict(joint_armature=[_non_negative(j, "armature", w) for j, w in zip(joints, wheres)],
                 joint_damping=[_non_negative(j, "damping", w) for j, w in zip(joints, wheres)])
 

@@ -4,58 +4,17 @@
 call, so several simulators in one process never interfere) and one fixed-base robot loaded
 from URDF with ``URDF_USE_INERTIA_FROM_FILE`` (otherwise pybullet recomputes the inertias
 from the collision shapes). Gravity is −9.81 m/s² along −y, as in :mod:`planar_chain`: the
-planar chains move in the vertical x-y plane.
+planar chains move in the vertical x-y plane. pybullet's artificial link damping is set to 0,
+so the dynamics are the URDF's; nothing is random: the same inputs give the same outputs.
 
-Control modes (``step`` takes one command per movable joint, in ``joint_names`` order):
-
-* ``"position"``: targets are clipped to the joint limits and tracked by pybullet's
-  POSITION_CONTROL motors with ``forces`` = the effort limits;
-* ``"torque"``: the default velocity motors are disabled first (VELOCITY_CONTROL with
-  force 0, else they brake every joint), torques are clipped to ± the effort limits —
-  pybullet does not enforce URDF effort limits — and applied with TORQUE_CONTROL at every
-  physics step (pybullet clears applied torques after each step).
-
-pybullet's artificial link damping (linear/angular 0.04 by default) is set to 0, so the
-dynamics are the URDF's. There is nothing random in the simulation: the same inputs give the
-same outputs, bit for bit.
-
-Joint drives (:mod:`lpa_transfer.robots.params`, "Drive"):
-
-* viscous damping D, URDF ``<dynamics damping=D>`` (``joint_damping``): pybullet applies
-  τ = −D·q̇ itself in every control mode, explicitly, from the velocity at the start of the
-  physics step (checked on a free joint, bench/README.md). Explicit damping diverges once
-  D·dt > 2·(the joint's inertia): the youBot's wrist roll (7e-5 kg·m², D = 1) without its
-  armature runs away to pybullet's 100 rad/s clamp. So in torque mode the simulator switches
-  pybullet's damping off and applies it itself, implicitly (below);
-  position mode keeps pybullet's (its motor constraints hold the joints);
-* armature A (``<lpa:armature>``, :func:`lpa_transfer.robots.serial_chain.urdf_joint_armatures`;
-  ``armature``): pybullet has no armature parameter. In torque mode, when a joint has an
-  armature or damping, the simulator makes the arm move as
-
-      (M(q) + diag(A)) q̈ + h(q, q̇) + D q̇⁺ = τ,   q̇⁺ = q̇ + dt·q̈ (the velocity after the step):
-
-  at every physics step it reads M (``calculateMassMatrix``) and h = Coriolis + gravity
-  (``calculateInverseDynamics`` at q̈ = 0) of the current state and applies τ' = M q̈* + h with
-  q̈* = (M + diag(A + D·dt))⁻¹ (τ − D q̇ − h), so pybullet's own step (M q̈ = τ' − h) produces
-  exactly q̈*. This is the usual rotor model of manipulator dynamics (reflected inertia
-  J_rotor·N² on the diagonal of M); what it leaves out is the spinning rotor's coupling to
-  the joints before it, J_rotor·N and J_rotor, i.e. 1/N and 1/N² of A (1.4 % at the youBot's
-  wrist, N = 71; 0.4 % at the AX-12A's 254). The obvious alternative, adding A about the
-  joint axis to the child link's inertia in the URDF, was measured and rejected: I + A·aaᵀ
-  breaks the rigid-body triangle inequality, and pybullet then sets the link's inertia to
-  zero; a disc-shaped addition (A about the axis, A/2 across it) loads, but pybullet then
-  also adds A to every joint before it with a parallel axis and to the coupling terms (on the
-  youBot file, bench/README.md). Joint-limit and contact impulses still see M alone. The
-  reported efforts are the commanded (clipped) τ. Position mode uses pybullet's motor
-  constraints, which do not see the armature (damping still applies there).
-
-Actuators in torque mode (``actuator``): ``"torque"`` (default) is the above. ``"velocity_motor"``
-is V-REP's torque mode, which the thesis' chapter 5 used (V-REP 3.3.2 default joints, §5.5.1):
-each joint's velocity motor runs towards ± its velocity limit (the URDF's, the sign of τ) with
-its force capped at |τ|, solved inside the constraint solver. Below the velocity limit that is
-the torque τ; at the limit the motor holds the speed (as far as |τ| can) instead of
-accelerating. V-REP's default joints have neither rotor inertia nor viscous damping, so this
-actuator applies neither the URDF's armature nor its damping (issue 26's actuators factor).
+Control modes: ``"position"`` (pybullet's position motors, targets clipped to the limits) and
+``"torque"`` (torques clipped to ± the effort limits, which pybullet does not enforce). In
+torque mode the joint drives of :mod:`lpa_transfer.robots.params` act as the usual rotor
+model, (M(q) + diag(A)) q̈ + h(q, q̇) + D q̇⁺ = τ, solved implicitly at every physics step,
+because pybullet has no armature and its explicit damping diverges on light geared links.
+Actuator ``"velocity_motor"`` is V-REP's torque mode, which the thesis' chapter 5 used
+(§5.5.1): velocity motors towards ± the velocity limit with force capped at |τ|, no armature
+or damping. The equations and their limits: docs/library.md, "The simulator".
 """
 from dataclasses import dataclass
 from pathlib import Path
@@ -320,7 +279,8 @@ class RobotSimulator:
         ``velocities`` in one physics step of torque mode with the ``"torque"`` actuator:
         (M(q) + diag(A + D·dt)) q̈ + h(q, q̇) + D q̇, the drive model of the module docstring
         (no effort clipping; the simulation's state is not touched). What the robot's own
-        inverse dynamics say a sample's torque should be (issue 26's mapping ceiling)."""
+        inverse dynamics say a sample's torque should be (the chapter 5 ablation's mapping
+        ceiling, scenarios/inverse_dynamics/reference_results/ablation/README.md)."""
         if self.control_mode != "torque" or self._motor:
             raise ValueError("inverse_dynamics is the torque mode's drive model; this "
                              f"simulator runs {self.control_mode!r} with the {self.actuator!r} "

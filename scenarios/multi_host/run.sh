@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The node graph over three network "hosts": Linux network namespaces joined by a bridge that
-# lives in a fourth, "switch" namespace (issue 30). robots: the two robot_sims; mapping:
+# lives in a fourth, "switch" namespace. robots: the two robot_sims; mapping:
 # lpa_mapping; learners: the collector, the evaluation and the recorder. The 2-link graph
 # scenario (scenarios/two_link_graph/run.sh), or with --scenario inverse_dynamics the default
 # demo's graph, runs unchanged, each node on its host.
