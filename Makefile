@@ -1,6 +1,6 @@
 # Entry points; everything goes through tools/ so that there is one set-up path.
 # Extra arguments: make test ARGS='-k procrustes -x'; make ch5 ARGS='--out runs/mine'
-# Durations (2 cores) are in README.md; every target writes into runs/<name>/.
+# Durations (2 cores) are in docs/performance.md; every target writes into runs/<name>/.
 ARGS ?=
 RUN = bash tools/setup.sh && bash
 PY = bash tools/setup.sh && bash -c 'source tools/env.sh && exec python "$$@"' python

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 27, experiment 1 (thesis §6.5.1): diagnose why plain LPA ends below scratch, in
+"""Experiment 1 (thesis §6.5.1): diagnose why plain LPA ends below scratch, in
 process (lpa_transfer.goal_babbling.diagnosis; no ROS graph). Writes into OUTPUT_DIR
 (default runs/diagnosis_exp1): diagnosis.json (everything), mapping.csv (per seed and
 T_guided: correspondences, mapping error, shares within 1/5/10 mm), runs.csv (per seed,
