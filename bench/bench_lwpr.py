@@ -2,7 +2,7 @@
 rate for 15 inputs -> 5 outputs, one 2-input update, and the start-up time.
 
 The library's LWPR runs its per-sample update and prediction in compiled kernels
-(lpa_transfer/learners/_lwpr_kernels.py, numba); bench/reference_lwpr.py is the numpy
+(lpa_transfer/learners/_lwpr_kernels.py, numba); test/oracles/reference_lwpr.py is the numpy
 implementation they replaced, kept frozen as the yardstick. Both run here on the same data in
 the same process, so the speed-up is measured under the same load. The issue's goals: one
 predict + update cycle of the 15-input model within 0.1 ms (>= 10,000 cycles/s), single
@@ -49,20 +49,32 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import copy  # noqa: E402
+import importlib.util  # noqa: E402
 import platform  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
 from bench import datasets  # noqa: E402
-from bench.reference_lwpr import LWPR as ReferenceLWPR  # noqa: E402
 from lpa_transfer.learners.lwpr import LWPR  # noqa: E402
 from lpa_transfer.robots.planar_chain import babbling_trajectory, inverse_dynamics  # noqa: E402
 
+
+def _reference_lwpr():
+    """The frozen numpy LWPR, kept beside the tests that check the library against it."""
+    path = Path(__file__).resolve().parents[1] / "test" / "oracles" / "reference_lwpr.py"
+    spec = importlib.util.spec_from_file_location("reference_lwpr", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.LWPR
+
+
+ReferenceLWPR = _reference_lwpr()
 HYPERPARAMETERS = dict(init_D=30.0, init_alpha=0.01)
 #: The 2-input "cross" setting of test/test_lwpr.py.
 CROSS = dict(init_D=25.0, init_alpha=250.0, w_gen=0.2, norm_in=1.0)

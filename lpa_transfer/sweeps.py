@@ -5,15 +5,15 @@ results are merged into the outputs of one run over them all.
 
 A task is one seed's whole node graph (the chapter's ``run.sh`` with an override naming the
 seed, in its own ROS domain and run directory) or one in-process run (``python -m
-bench.id_ablation run``, one set-up and seed). Tasks run as subprocesses of the workers, so
-a worker thread is one task slot: the local cluster has as many as the machine has cores
-(``--workers``), and ``--address tcp://HOST:8786`` sends the tasks to a running cluster
-(``dask scheduler`` on one machine, ``dask worker tcp://HOST:8786 --nthreads N`` on each,
-from the project's venv; every machine holds the repository at the same path). A task that
-fails is run once more; a task that fails twice is named with the end of its log, and the
-sweep exits 1 without merging. Once every task is done, the chapter's merge
-(``merge_results.py``, or ``bench.id_ablation export``/``report``) joins the tasks' results
-into the output directory, as one run over all the seeds writes them.
+lpa_transfer.inverse_dynamics.in_process run``, one set-up and seed). Tasks run as subprocesses
+of the workers, so a worker thread is one task slot: the local cluster has as many as the
+machine has cores (``--workers``), and ``--address tcp://HOST:8786`` sends the tasks to a
+running cluster (``dask scheduler`` on one machine, ``dask worker tcp://HOST:8786 --nthreads
+N`` on each, from the project's venv; every machine holds the repository at the same path). A
+task that fails is run once more; a task that fails twice is named with the end of its log, and
+the sweep exits 1 without merging. Once every task is done, the chapter's merge
+(``merge_results.py``, or ``in_process export``/``report``) joins the tasks' results into the
+output directory, as one run over all the seeds writes them.
 
 Each graph task claims a free ROS domain in ``--domains`` (default 150-199) on its machine
 through a lock file, so concurrent tasks, and concurrent sweeps on one machine, never share
@@ -323,12 +323,16 @@ def merge_graph(chapter, out, tasks, results, say=_say):
     return 0
 
 
+#: The in-process experiment's module, run by the in-process tasks and merge.
+IN_PROCESS = "lpa_transfer.inverse_dynamics.in_process"
+
+
 def inprocess_tasks(out, setups, seeds, trials):
-    """One task per set-up and seed: ``bench.id_ablation run`` into ``out/tasks``."""
+    """One task per set-up and seed: ``in_process run`` into ``out/tasks``."""
     tasks = []
     for setup in setups:
         for seed in seeds:
-            argv = ("python", "-m", "bench.id_ablation", "run", "--setup", setup,
+            argv = ("python", "-m", IN_PROCESS, "run", "--setup", setup,
                     "--seed", str(seed), "--trials", str(trials), "--out", str(out / "tasks"))
             run_dir = out / "tasks" / setup
             tasks.append(Task(f"{setup} seed {seed}", argv, str(run_dir),
@@ -341,15 +345,16 @@ def merge_inprocess(out, setups, tasks, results, say=_say):
     """The tasks' seed files on this machine, then ``export`` per set-up (``out/<setup>/``, a
     chapter 5 run directory) and ``report`` over the set-ups (``out/report.txt``)."""
     _write_results(tasks, results)
-    bench = [sys.executable, "-m", "bench.id_ablation"]
+    in_process = [sys.executable, "-m", IN_PROCESS]
     for setup in setups:
-        done = subprocess.run(bench + ["export", "--setup", setup, "--to", str(out / setup),
-                                       "--out", str(out / "tasks")],
+        done = subprocess.run(in_process + ["export", "--setup", setup, "--to",
+                                            str(out / setup), "--out", str(out / "tasks")],
                               cwd=ROOT, capture_output=True, text=True)
         if done.returncode != 0:
             say(f"error: exporting {setup} failed:\n{done.stderr.strip()}")
             return 1
-    done = subprocess.run(bench + ["report", "--out", str(out / "tasks"), "--setups", *setups],
+    done = subprocess.run(in_process + ["report", "--out", str(out / "tasks"),
+                                        "--setups", *setups],
                           cwd=ROOT, capture_output=True, text=True)
     (out / "report.txt").write_text(done.stdout)
     if done.returncode != 0:

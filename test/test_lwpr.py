@@ -1,5 +1,5 @@
 """LWPR (lpa_transfer.learners.lwpr): learning, receptive-field bookkeeping, API and input checks,
-and equality with the frozen numpy implementation (bench/reference_lwpr.py) that the compiled
+and equality with the frozen numpy implementation (test/oracles/reference_lwpr.py) that the compiled
 kernels replaced.
 
 Accuracy thresholds were measured with the seeds used here and on two further seeds and have
@@ -317,10 +317,10 @@ def test_scikit_learn_estimator_checks():
 # ----------------------------------------------------------------- equality with the reference
 @functools.cache
 def reference_lwpr():
-    """The frozen numpy LWPR of bench/reference_lwpr.py (loaded by path: bench/ is not on
-    the test path under every runner)."""
+    """The frozen numpy LWPR of test/oracles/reference_lwpr.py (loaded by path: oracles/ is
+    no package)."""
     spec = importlib.util.spec_from_file_location("reference_lwpr",
-                                                  ROOT / "bench" / "reference_lwpr.py")
+                                                  ROOT / "test" / "oracles" / "reference_lwpr.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module.LWPR
@@ -385,7 +385,7 @@ EQUALITY_CASES = {
 
 @pytest.mark.parametrize("case", list(EQUALITY_CASES))
 def test_equals_the_reference_implementation(case):
-    """The compiled LWPR reproduces bench/reference_lwpr.py: the predictions made while
+    """The compiled LWPR reproduces test/oracles/reference_lwpr.py: the predictions made while
     learning online (update), the final predictions and confidences, the number of
     receptive fields, the pruning counts and the learned arrays of every field, to RTOL."""
     data, n, params = EQUALITY_CASES[case]

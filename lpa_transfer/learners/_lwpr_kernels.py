@@ -11,7 +11,7 @@ API and the input checks and owns the arrays; the kernels update them in place.
 The algorithm is that of Vijayakumar, D'Souza & Schaal (2005, Tables 3-5), with the numerical
 heuristics of the reference library (docs/library.md, "LWPR"). Each RF is updated with the
 same operations in the same order as the numpy implementation these kernels replace (kept as
-bench/reference_lwpr.py and compared with it by test/test_lwpr.py), so results agree to
+test/oracles/reference_lwpr.py and compared with it by test/test_lwpr.py), so results agree to
 rounding; only sums whose order numpy leaves to its SIMD loops or BLAS may differ in the last
 bits. No fast-math: it would reorder operations. The arrays' layout (row k = RF k; blocks of
 rows with bounding boxes that let a query skip RFs it cannot activate): docs/library.md.

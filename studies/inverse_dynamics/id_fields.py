@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""Where do the chapter 5 learners' receptive fields lie after learning? (issue 26's cap)
+"""Where do the chapter 5 learners' receptive fields lie after learning?
 
-Usage: ``python -m bench.id_fields [--setup S] [--seed N] [--trials 15] [--targets ...]
+Usage: ``python -m studies.inverse_dynamics.id_fields [--setup S] [--seed N] [--trials 15] [--targets ...]
 [--stars ...] [--every-trial]``, from the repository root.
 
-For one set-up of ``bench/id_ablation.py`` and one babbling seed, each target robot and star
+For one set-up of ``inverse_dynamics.in_process`` and one babbling seed, each target robot and star
 learns the star from scratch and from each initial data set of §5.5.3 (random, transfer-PA,
-transfer-LPA, own+transfer) for ``--trials`` trials, as id_ablation runs them. After the last
+transfer-LPA, own+transfer) for ``--trials`` trials, as in_process runs them. After the last
 trial (``--every-trial``: after each) it prints, per condition, the columns of
 :func:`fields_on_task`: where the learner's receptive fields lie along the star's desired
 states, how much the fields made by the initial data weigh in the prediction there, the
@@ -22,7 +22,7 @@ import argparse
 
 import numpy as np
 
-from bench import id_ablation
+from lpa_transfer.inverse_dynamics import in_process
 
 
 #: The columns :func:`fields_on_task` fills, as the table heads them.
@@ -65,7 +65,7 @@ def fields_on_task(learner, n_initial_fields, desired):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--setup", default="zero_answer", choices=sorted(id_ablation.SETUPS))
+    parser.add_argument("--setup", default="zero_answer", choices=sorted(in_process.SETUPS))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--trials", type=int, default=15)
     parser.add_argument("--targets", nargs="+", default=["pincher", "youbot"])
@@ -85,7 +85,7 @@ def main(argv=None):
                          else f"{figures[column]:>13.3f}" for column in COLUMNS)
               + f" {1e3 * errors[-1]:>10.2f}", flush=True)
 
-    for target, star, condition, robot, learner, made, errors in id_ablation.runs(
+    for target, star, condition, robot, learner, made, errors in in_process.runs(
             args.setup, args.seed, args.trials, targets=args.targets, stars=args.stars,
             watch=show if args.every_trial else None):
         if target in args.targets and not args.every_trial:   # (else a source's experience)

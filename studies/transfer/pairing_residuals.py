@@ -1,4 +1,4 @@
-"""Pairing residuals of every scenario's correspondence collection, before and after issue 31.
+"""Pairing residuals of every scenario's correspondence collection, before and after the pairing check.
 
 Runs each collection in process, as its node runs it over the graph (the tests check that the
 two give the same pairs bit for bit), once the way the collector worked before the pairing
@@ -9,17 +9,17 @@ target's reached postures). Both are measured with the check's residual, the che
 "before" (tolerance inf), so that the table says how far apart the pairs were and how many the
 check would have dropped.
 
-* §3.6 arms (two_link_graph/config.yaml) and the issue's user pair (user_pair.yaml):
+* §3.6 arms (two_link_graph/config.yaml) and the user pair (user_pair.yaml):
   ``same_command``, residual = largest difference of the common joints (rad);
 * chapter 6 guided exploration: experiment 1 (config.yaml, seed 0's babbling) and Nao -> Poppy
   (nao_poppy.yaml), residual the same, over the movements whose command the source could follow;
 * chapter 4 (lfd): ``same_task_point`` through the demonstrator's inverse kinematics (a
   kinematic collection, no physics): residual = ||FK_H(q_H) − x_H|| (m), the poses whose
-  point the demonstrator does not reach within ``ik_tolerance`` dropped (unchanged by issue
-  31, one row: "before" = "after").
+  point the demonstrator does not reach within ``ik_tolerance`` dropped (unchanged by the
+  check, one row: "before" = "after").
 
 Chapter 5 pairs by ``same_time_index`` with 10 steps a sample on both robots: 0 s by
-construction (its smoke test asserts it). Usage: ``python -m bench.pairing_residuals
+construction (its smoke test asserts it). Usage: ``python -m studies.transfer.pairing_residuals
 [--only NAME ...] [--guided-seconds S]``.
 """
 import argparse
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.scenario_params import node_params
+from studies.scenario_params import node_params
 from lpa_transfer.exploration.babbling import BabblingProgram
 from lpa_transfer.exploration.correspondences import (PairCheck, SettlingStep,
                                                       collect_correspondences,
@@ -45,7 +45,7 @@ from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "scenarios"
-BEFORE = PairCheck(max_settle_steps=0, tolerance=np.inf)     # the collector before issue 31
+BEFORE = PairCheck(max_settle_steps=0, tolerance=np.inf)     # the collector before the check
 AFTER = PairCheck()
 
 

@@ -1,5 +1,5 @@
 """A node's parameters as a scenario's run.sh gives them: ``--params-file`` yaml files, later
-ones overriding earlier ones (the benches that rebuild a scenario's pieces in process)."""
+ones overriding earlier ones (the studies that rebuild a scenario's pieces in process)."""
 from pathlib import Path
 
 import yaml

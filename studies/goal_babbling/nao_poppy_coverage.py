@@ -2,9 +2,9 @@
 in process on the analytic arms): ceilings on the reaching rate that data confined to some
 poses can give, next to what transfer reaches right after guided exploration.
 
-    nice -n 10 python -m bench.nao_poppy_coverage --seeds 0 1 2
+    nice -n 10 python -m studies.goal_babbling.nao_poppy_coverage --seeds 0 1 2
 
-The setting is nao_poppy.yaml's, built by bench/nao_poppy_rates.py (4 movements a simulated
+The setting is nao_poppy.yaml's, built by nao_poppy_rates.py (4 movements a simulated
 second). Printed, as shares of the test points within the reaching threshold (0.015 m):
 
 - Poppy with all 5 joints, and with its torso at home (Poppy's own ranges of the 4 shared
@@ -20,7 +20,7 @@ second). Printed, as shares of the test points within the reaching threshold (0.
 import argparse
 import dataclasses
 
-from bench.nao_poppy_rates import model_after_guided, prepare
+from studies.goal_babbling.nao_poppy_rates import model_after_guided, prepare
 
 import numpy as np  # noqa: E402
 

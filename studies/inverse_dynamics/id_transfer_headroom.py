@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""How much of the chapter 5 transfer is lost in the mapping? (thesis §5.4, §5.5.3; issue 4)
+"""How much of the chapter 5 transfer is lost in the mapping? (thesis §5.4, §5.5.3)
 
-Usage: ``python -m bench.id_transfer_headroom [--seed S] [--trials N] [--targets pincher youbot]
+Usage: ``python -m studies.inverse_dynamics.id_transfer_headroom [--seed S] [--trials N] [--targets pincher youbot]
 [--stars star1 star2]``, from the repository root.
 
 In process, with the library only (no ROS), from ``scenarios/inverse_dynamics/config.yaml``:
@@ -22,7 +22,6 @@ from where Star 1's babbling left them), then
 The simulation and the learners are deterministic: the same seed prints the same numbers.
 """
 import argparse
-import dataclasses
 import json
 from pathlib import Path
 
@@ -30,103 +29,14 @@ import numpy as np
 import yaml
 from sklearn.neighbors import NearestNeighbors
 
-from lpa_transfer.exploration.babbling import BabblingProgram, box_around
-from lpa_transfer.robots.kinematics import robot_kinematics
-from lpa_transfer.robots.control import PID, start_servo
-from lpa_transfer.exploration.correspondences import collect_correspondences
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
-                                                           make_regressor)
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
-from lpa_transfer.inverse_dynamics.tasks import star_task
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
+from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
 
-from bench.id_mapping_quality import held_out_predictions   # the same held-out blocks
+from studies.inverse_dynamics.id_mapping_quality import held_out_predictions   # the same held-out blocks
 
-CONFIG = Path("scenarios/inverse_dynamics/config.yaml")
 MOVING = 1e-3          # a column whose spread is below this is a joint the babbling leaves still
-
-
-class StarRobot:
-    """One robot of the scenario on one star: its simulator, task and learner settings.
-    ``actuator``: the simulator's (``"torque"`` or ``"velocity_motor"``, V-REP's torque mode;
-    lpa_transfer.robots.simulator), issue 26's actuators factor."""
-
-    def __init__(self, config, name, star, actuator="torque"):
-        node = config[f"/{name}/{star}"]["ros__parameters"]
-        self.params = load_robot_params(node["robot"])
-        self.kinematics = robot_kinematics(self.params, node["centre_pose"])
-        self.dt = 1.0 / node["control_rate"]
-        physics_step = config[f"/{name}/robot_sim"]["ros__parameters"]["physics_step"]
-        self.n_steps = max(1, round(self.dt / physics_step))
-        self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
-                                    start_angle=node["star_start_angle"])
-        self.pid_gains = node["pid"]
-        self.regressor = (node["regressor"], dict(json.loads(node["regressor_params"]),
-                                                  norm_in=input_scale(*self.trajectory[:3])))
-        self.sim = RobotSimulator(robot_urdf(self.params), "torque", physics_step,
-                                  initial_positions=self.kinematics.home, actuator=actuator)
-
-    def configure(self, config, name, star, time_law=None, lwpr=None):
-        """Issue 26's switches: the star legs' time law and LWPR hyperparameters replacing the
-        config's (``lwpr``, a dict)."""
-        node = config[f"/{name}/{star}"]["ros__parameters"]
-        if time_law is not None:
-            self.trajectory = star_task(self.kinematics, node["star_radius"], self.dt,
-                                        start_angle=node["star_start_angle"], time_law=time_law)
-        if lwpr:
-            self.regressor = (self.regressor[0], {**self.regressor[1], **lwpr})
-        return self
-
-    def learner(self, samples=None, **yielding):
-        """A fresh learner initialised with ``samples`` (as its own data, or so that they
-        yield to its own experience: FeedForwardLearner's ``yielding`` and its settings)."""
-        learner = FeedForwardLearner(make_regressor(self.regressor[0], **self.regressor[1]),
-                                     PID.from_gains(self.pid_gains), **yielding)
-        if samples is not None:
-            learner.initialise(samples)
-        return learner
-
-    def trials(self, learner, n_trials, start=None, after_trial=None):
-        """Tracking errors (m) and the experience of ``n_trials`` trials from rest at the centre
-        (or at the joint positions ``start``); ``after_trial(learner, errors)``, if given, is
-        called after each trial (to look at the learner as it learns)."""
-        self.sim.reset(self.kinematics.home if start is None else start)
-        state, errors, experience = self.sim.state(), [], []
-        for _ in range(n_trials):
-            trial = learner.run_trial(self.sim.step, state, *self.trajectory, self.n_steps,
-                                      self.dt)
-            state = trial.end_state
-            errors.append(trial.tracking_error)
-            experience.append(trial.samples)
-            if after_trial is not None:
-                after_trial(learner, errors)
-        return errors, np.vstack(experience)
-
-
-def babble(config, robots, star, seed, reset=True):
-    """The seed's correspondences near ``star``: (source rows, target rows) as the graph's
-    collector /babbling/<star> makes them (source = the config's source robot). ``reset``:
-    the robots start at rest at the star's centre (else where their simulators are)."""
-    common = config["/babbling/*"]["ros__parameters"]
-    own = config[f"/babbling/{star}"]["ros__parameters"]
-    k = config["experiment"]["ros__parameters"]["stars"].index(star)
-    program = BabblingProgram(common["program"], common["n_segments"],
-                              common["samples_per_segment"], 10 * seed + k,
-                              time_law=common.get("time_law", "linear"))
-    kinematics, steps = [], []
-    for side, robot in zip(("source", "target"), robots):
-        kinematics.append(dataclasses.replace(robot.kinematics, task_box=box_around(
-            robot.kinematics, own[f"{side}_task_halfwidth"])))
-        if reset:
-            robot.sim.reset(robot.kinematics.home)
-        steps.append(start_servo(robot.sim.step, robot.params.n_joints,
-                                 PID.from_gains(common[f"{side}_pid"])).step)
-    pairs = collect_correspondences(program, common["pairing_rule"], *kinematics, *steps,
-                                    common["steps_per_sample"], tuple(common["features"]))
-    return pairs.source, pairs.target
 
 
 def feature_nmse(make_model, source, target):

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Seed by seed: how close the transferred data land to the target's own data of the star,
-beside the time the seed's transfer saved (issue 26: what caps the saving, and by how much).
+beside the time the seed's transfer saved (what caps the saving, and by how much).
 
-For each seed, the babbling session and the mappings of ``bench/id_ablation.py``'s set-up
+For each seed, the babbling session and the mappings of ``inverse_dynamics.in_process``'s set-up
 (``--setup``, default ``zero_answer``, config.yaml's choice) are rebuilt; the source's
 experience of each star from scratch (the same for every seed: learning from scratch starts at
 rest at the star's centre) is mapped by PA and LPA, and the mapped samples are compared with
@@ -17,7 +17,7 @@ default the final set-up's 10 seeds in process), each seed's curves alone
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m bench.id_seed_accuracy [--seeds 0 1 ...] [--trials 20] [--run RUN_DIR]
+    python -m studies.inverse_dynamics.id_seed_accuracy [--seeds 0 1 ...] [--trials 20] [--run RUN_DIR]
 """
 import argparse
 import json
@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from bench.id_ablation import SETUPS, TOLERANCE, BABBLING_SECONDS, set_up
-from bench.id_transfer_headroom import MOVING, against_own
+from lpa_transfer.inverse_dynamics.in_process import SETUPS, TOLERANCE, BABBLING_SECONDS, set_up
+from studies.inverse_dynamics.id_transfer_headroom import MOVING, against_own
 from lpa_transfer.inverse_dynamics.analysis import per_seed_savings
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
 

@@ -1,34 +1,25 @@
 #!/usr/bin/env python3
-"""Chapter 5's set-up ablation (issue 26): every thesis condition under each factor switched
-alone and all together, in process, with the tables the thesis reports (§5.5.3).
+"""Chapter 5's experiment in process (thesis §5.5.3): the graph's experiment computed with the
+library's simulator, PID and LWPR, under named set-ups, with the tables the thesis reports.
 
 Usage, from the repository root::
 
-    python -m bench.id_ablation run --setup S --seed N [--trials 15] [--out DIR]
-    python -m bench.id_ablation report [--out DIR] [--setups S ...] [--summary]
-        [--star-out STAR=DIR ...]
-    python -m bench.id_ablation export --setup S --to RUN_DIR [--out DIR]
+    python -m lpa_transfer.inverse_dynamics.in_process run --setup S --seed N [--trials 15]
+        [--out DIR]
+    python -m lpa_transfer.inverse_dynamics.in_process report [--out DIR] [--setups S ...]
+        [--summary] [--star-out STAR=DIR ...]
+    python -m lpa_transfer.inverse_dynamics.in_process export --setup S --to RUN_DIR [--out DIR]
 
-``run`` writes ``DIR/S/seed_N.json``: the tracking-error curves (mm per trial) of both
-robots on both stars for the conditions of §5.5.3 (uninitialised, random, transfer-PA,
-transfer-LPA) and ours (own+transfer-PA/-LPA). It computes what the graph's experiment
-does (run_experiment.py: one babbling session over both stars, models fitted on all its
-pairs, the source's 15 trials from scratch transferred) with the library's simulator, PID and
-LWPR (``bench/id_transfer_headroom.py``'s StarRobot); on the smoke size with both stars and
-no start noise its curves equal the graph's (reference_results/ablation/README.md). Learning
-from scratch starts at rest at the star's centre, so it is the same run for every seed (the
-graph's ``start_noise`` is not used here). ``report`` joins the seeds of each set-up: per robot and
-star, the first-trial error and the trials to convergence of every condition under both rules
-(within 10 % of scratch's final error; each curve by its own plateau), and per robot the
-training time saved as §5.5.3 counts it (both stars, 14.4 s of babbling charged to the
-initialised conditions), beside the thesis' figures. ``export`` writes one set-up's seeds as
-a chapter 5 run directory (results.json, learning_curves.csv, Fig. 5-7/5-8, report.txt: the
-graph's outputs, but Fig. 5-6), which merge_results.py and paired_seeds.py read.
-
-The set-ups (``SETUPS``) are issue 26's factors: 1 the star legs' time law, 2 the actuator,
-3 LWPR's input scaling (init_D 30 on raw inputs), 4 spline correspondences, 5 the babbling
-volume, 6 LWPR's answer where no field is active; 7, the convergence rule, is a column of the
-report. Each run is deterministic: the same set-up and seed give the same curves.
+``run`` writes ``DIR/S/seed_N.json``, the tracking-error curves (mm per trial) of both robots
+on both stars for every condition (:func:`runs`: one babbling session over both stars, models
+fitted on all its pairs, the source's trials from scratch transferred, as run_experiment.py
+does; on the smoke size without start noise the curves equal the graph's). ``report`` joins
+the seeds of each set-up: first-trial errors, trials to convergence under both rules and the
+training time saved as §5.5.3 counts it, beside the thesis' figures. ``export`` writes one
+set-up's seeds as a chapter 5 run directory (report.write_outputs), which merge_results.py
+and paired_seeds.py read. A set-up (:data:`SETUPS`) switches factors of the scenario (time
+laws, actuator, LWPR settings, spline correspondences, babbling volume); each run is
+deterministic.
 """
 import argparse
 import copy
@@ -40,22 +31,22 @@ from types import SimpleNamespace
 import numpy as np
 import yaml
 
-from bench.id_transfer_headroom import CONFIG, StarRobot, babble
 from lpa_transfer.inverse_dynamics.analysis import (BANDS, CONDITIONS, TRIAL_SECONDS,
                                                     band_savings,
                                                     conditions_in, convergence_table,
                                                     finals_against_scratch, paired_against)
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
 from lpa_transfer.inverse_dynamics.report import write_outputs
+from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
 from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
 THESIS_LWPR = {"init_D": 30.0, "norm_in": 1.0}
-#: The ablation's base is the set-up of the 2026-12-04 references (config.yaml then): LWPR
-#: answers the nearest field's offset where none is active. config.yaml has since chosen the
-#: zero answer (factor 6), so every set-up states the answer it runs with.
+#: The set-ups' base is the first references' set-up: LWPR answers the nearest field's offset
+#: where none is active. config.yaml has since chosen the zero answer (factor 6), so every
+#: set-up states the answer it runs with.
 BASE_LWPR = {"empty_prediction": "nearest"}
-#: name -> the switches of issue 26's factors (absent: today's choice).
+#: name -> the switches of the set-up's factors (absent: today's choice).
 SETUPS = {
     "today": {},
     "linear_legs": {"time_law": "linear"},                        # factor 1
@@ -240,9 +231,9 @@ def gate_initial_fields(learner):
     """Make the learner's LWPR answer 0 for an output wherever the trustworthy fields that
     would answer it are all fields its initial data made, none activated above ``w_gen``,
     as learning from scratch answers where it has no field of its own (the zero answer: the
-    PID acts alone). A diagnostic of issue 26's cap (how much do weak answers from initial data off
-    the task cost?), not the thesis' LWPR. Fields are known by output and centre (an LWPR
-    centre never moves; pruning moves rows)."""
+    PID acts alone). A diagnostic of what caps the saving (how much do weak answers from
+    initial data off the task cost?), not the thesis' LWPR. Fields are known by output and
+    centre (an LWPR centre never moves; pruning moves rows)."""
     lwpr = learner.regressor
     rfs = lwpr._rfs
 
@@ -383,7 +374,7 @@ def report(out, setups, star_out=None):
     return "\n".join(lines)
 
 
-def summary(out, setups, star_out=None):
+def setups_summary(out, setups, star_out=None):
     """One table per target robot, one row per set-up: learning from scratch's trials to
     convergence and first-trial error per star, the thesis conditions' first-trial errors, and
     the time saved by the mean curves per condition the runs hold under both rules ("scratch
@@ -431,11 +422,12 @@ def export(out, setup, to):
                                  done_seeds=result.seeds)
     curves = {key: runs.tolist() for key, runs in result.metres.items()}
     return write_outputs(curves, {}, experiment, Path(to),
-                         where=f"in process (bench/id_ablation.py, set-up {setup}: "
-                               f"{json.dumps(SETUPS[setup])}; equal to the graph at start_noise 0)")
+                         where=f"in process (lpa_transfer/inverse_dynamics/in_process.py, "
+                               f"set-up {setup}: {json.dumps(SETUPS[setup])}; equal to the "
+                               f"graph at start_noise 0)")
 
 
-def main(argv=None):
+def _main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     one = sub.add_parser("run")
@@ -466,7 +458,7 @@ def main(argv=None):
         return 0
     if args.command == "report":
         star_out = dict(item.split("=", 1) for item in args.star_out)
-        print((summary if args.summary else report)(args.out, args.setups, star_out))
+        print((setups_summary if args.summary else report)(args.out, args.setups, star_out))
         return 0
     yielding = {"own_w_gen": args.own_w_gen}
     curves = run(args.setup, args.seed, args.trials, conditions=args.conditions,
@@ -481,4 +473,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(_main())

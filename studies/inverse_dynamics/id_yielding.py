@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """Designs of a chapter 5 transfer that yields to the robot's own experience, measured on the
-seeds used to choose (0 and 1; seeds 10-19 confirm the chosen one, id_ablation's runs).
+seeds used to choose (0 and 1; seeds 10-19 confirm the chosen one, in_process runs).
 
 Usage, from the repository root::
 
-    python -m bench.id_yielding run --seed N [--designs D ...] [--trials 20] [--out DIR]
-    python -m bench.id_yielding report [--out DIR]
+    python -m studies.inverse_dynamics.id_yielding run --seed N [--designs D ...] [--trials 20] [--out DIR]
+    python -m studies.inverse_dynamics.id_yielding report [--out DIR]
 
 Every design initialises the target's LWPR with the source's 15 trials from scratch mapped by
-PA (transfer-PA's data; set-up ``zero_spline_mj``, id_ablation.set_up) and learns online for
+PA (transfer-PA's data; set-up ``zero_spline_mj``, in_process.set_up) and learns online for
 ``--trials`` trials of both stars, beside learning from scratch; ``report`` prints, over the
 seeds in ``--out``, the time saved by the mean curves within 5 / 10 / 20 % of scratch's final
 error (analysis.convergence_table, 14.4 s of babbling charged) and the final errors (mean of
@@ -34,7 +34,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.exceptions import NotFittedError
 
-from bench.id_ablation import BABBLING_SECONDS, set_up
+from lpa_transfer.inverse_dynamics.in_process import BABBLING_SECONDS, set_up
 from lpa_transfer import _validation as check
 from lpa_transfer.inverse_dynamics.analysis import convergence_table
 from lpa_transfer.inverse_dynamics.interpolation import interpolated

@@ -1,15 +1,15 @@
-"""Chapter 5 set-up factors 1, 3 and 6 (issue 26): learning from scratch with the star legs'
+"""Chapter 5 set-up factors 1, 3 and 6: learning from scratch with the star legs'
 time law minimum-jerk (today's default) against constant speed ("linear"), in process, with
 today's LWPR settings or others (``--lwpr``: JSON of LWPR hyperparameters replacing the
 config's, e.g. the thesis' init_D 30 without normalisation and the reference library's
 empty prediction: '{"init_D": 30, "norm_in": 1, "empty_prediction": "zero"}').
 
-    nice -n 10 python -m bench.id_time_law [--trials 15] [--targets youbot pincher]
+    nice -n 10 python -m studies.inverse_dynamics.id_time_law [--trials 15] [--targets youbot pincher]
         [--time-laws minimum_jerk linear] [--lwpr JSON] [--actuator velocity_motor]
 
 For each robot and star of scenarios/inverse_dynamics/config.yaml, a learner from scratch
 (uninitialised, today's LWPR settings) tracks the star for ``--trials`` trials from rest at
-its centre (bench/id_transfer_headroom.py's StarRobot: the same simulator, PID and LWPR as the
+its centre (inverse_dynamics.star_robot.StarRobot: the same simulator, PID and LWPR as the
 graph). Printed: first and last trial's tracking error (mm), the trial from which the curve
 stays within 10 % of its own last trial (the scenario's convergence rule, with the learner's
 own final error as the reference), the share of control periods in which some joint's torque
@@ -22,7 +22,7 @@ import json
 import numpy as np
 import yaml
 
-from bench.id_transfer_headroom import CONFIG, StarRobot
+from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot
 from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
 from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS
 

@@ -4,7 +4,7 @@ exploration for T_guided s and transfer of the source's experience with PA or LP
 1 (as the thesis) or through the negative-transfer guard (GuardedModel, §6.6). Prints, per
 condition and T_guided, the reaching rate and mean error (mean over seeds) every 60 s.
 
-    nice -n 15 python -m bench.goal_babbling_transfer --seeds 2 --guided 60 240
+    nice -n 15 python -m studies.goal_babbling.goal_babbling_transfer --seeds 2 --guided 60 240
 
 Not run in CI: one 1000 s run takes ~5-20 s on one core, and the full grid (10 seeds, four
 T_guided, five conditions) ~1.5 h.

@@ -5,7 +5,7 @@ same 10,000 test correspondences of the §3.6 pair (end-effector RMSE, mm). A si
 a lot with the partition, so "equal accuracy" is judged on the mean paired difference and its
 standard error.
 
-Usage: python -m bench.compare_accuracy [--sizes 200 1000] [--runs 20]
+Usage: python -m studies.transfer.compare_accuracy [--sizes 200 1000] [--runs 20]
 """
 import argparse
 

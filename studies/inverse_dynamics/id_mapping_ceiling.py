@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""What a better mapping could save on chapter 5 (issue 26: which factor caps the saving, and
-by how much): the final set-up's transfer with parts of the mapped data replaced by the truth.
+"""What a better mapping could save on chapter 5 (which factor caps the saving, and by how
+much): the final set-up's transfer with parts of the mapped data replaced by the truth.
 
-For each seed the babbling session and the mappings of a set-up of ``bench/id_ablation.py``
+For each seed the babbling session and the mappings of a set-up of ``inverse_dynamics.in_process``
 (``--setup``: ``zero_answer``, the twenty-trial references' choice, or ``zero_spline_mj``,
 config.yaml's final one) are rebuilt, the source's experience of each star from
 scratch is mapped, and the target learns the star (as transfer-PA does) from initial data in
@@ -11,7 +11,7 @@ which part of what the mapping gave is replaced by the truth:
 * ``<M> states, true τ``: the mapped (q, q̇, q̈), with the torques the target's own dynamics
   give there (``RobotSimulator.inverse_dynamics``): the mapping's torque error removed;
 * ``own states, <M> τ``: the target's own (q, q̇, q̈) of the same trial and period (the
-  task's true correspondences, ``bench/id_seed_accuracy.py``), with the mapped torques: the
+  task's true correspondences, ``id_seed_accuracy.py``), with the mapped torques: the
   mapping's state error removed;
 * ``own data``: the target's own experience of the star (both removed: a mapping without
   error; the same for every seed, learning from scratch being deterministic).
@@ -24,8 +24,8 @@ random as analysis.per_seed_savings gives them.
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m bench.id_mapping_ceiling run --seed N [--setup S] [--trials 20] [--out DIR] [--parts]
-    python -m bench.id_mapping_ceiling report [--out DIR] [--kept DIR] [--parts]
+    python -m studies.inverse_dynamics.id_mapping_ceiling run --seed N [--setup S] [--trials 20] [--out DIR] [--parts]
+    python -m studies.inverse_dynamics.id_mapping_ceiling report [--out DIR] [--kept DIR] [--parts]
 
 ``--parts`` runs, kept apart, which of the mapped state's parts keeps the saving down:
 ``<M> q, own q̇ q̈, true τ`` and ``<M> q q̇, own q̈, true τ``.
@@ -37,9 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.id_ablation import BABBLING_SECONDS, SETUPS, TOLERANCE, load, set_up
-from bench.id_seed_accuracy import experiences
-from bench.id_transfer_headroom import MOVING
+from lpa_transfer.inverse_dynamics.in_process import BABBLING_SECONDS, SETUPS, TOLERANCE, load, set_up
+from studies.inverse_dynamics.id_seed_accuracy import experiences
+from studies.inverse_dynamics.id_transfer_headroom import MOVING
 from lpa_transfer.inverse_dynamics.analysis import convergence_table, per_seed_savings
 
 SETUP = "zero_answer"

@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
-"""Why do initialised youBot learners level off above learning from scratch? (thesis §5.5.3;
-issue 4)
+"""Why do initialised youBot learners level off above learning from scratch? (thesis §5.5.3)
 
-Usage: ``python -m bench.id_plateau [--seed S] [--trials N] [--target youbot] [--stars ...]
-[--variants default norm_out=1 ...]``, from the repository root.
+Usage: ``python -m studies.inverse_dynamics.id_plateau [--seed S] [--trials N] [--target youbot]
+[--stars ...] [--variants default norm_out=1 ...]``, from the repository root.
 
 In process, with the library only (no ROS), the scenario of
 ``scenarios/inverse_dynamics/config.yaml`` as ``id_transfer_headroom.py`` builds it: for each
@@ -54,7 +53,7 @@ from lpa_transfer.robots.control import PID
 from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner, make_regressor
 from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 
-from bench.id_transfer_headroom import CONFIG, StarRobot, babble
+from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
 
 
 def parse_variant(text):

@@ -4,7 +4,7 @@ from scratch and the benefit of transfer. scenarios/goal_babbling/nao_poppy.yaml
 rate (4 a second) from the scratch rows of this table: the rate at which our scratch
 learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
 
-    nice -n 10 python -m bench.nao_poppy_rates --rates 2 3 4 10 --seeds 0 1
+    nice -n 10 python -m studies.goal_babbling.nao_poppy_rates --rates 2 3 4 10 --seeds 0 1
 
 The robots, homes, boxes, test points (200 000 joint samples), threshold, guided
 exploration's target_range, LPA and guard are those of nao_poppy.yaml; Nao babbles with its
@@ -15,7 +15,7 @@ Prints, per rate and seed, the reaching rate every 600 s for scratch, guided exp
 alone (no transfer), LPA transfer, and LPA transfer behind the guard.
 
 ``--override FILE`` merges a scenario override (e.g. nao_poppy_zup.yaml, the thesis' z-up
-scene) into nao_poppy.yaml. ``--accuracy`` prints instead what caps the transfer (issue 27):
+scene) into nao_poppy.yaml. ``--accuracy`` prints instead what caps the transfer:
 the transferred samples' error against Poppy's true kinematics (shares within 1 / 5 / 10 /
 15 mm), and the share of the reachable test points near (within the threshold of) a
 transferred sample, an accurate one (error within the threshold), and one of scratch's own
@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 import numpy as np  # noqa: E402
 
-from bench.scenario_params import node_params  # noqa: E402
+from studies.scenario_params import node_params  # noqa: E402
 
 from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling  # noqa: E402
@@ -234,7 +234,7 @@ def accuracy(rate, seed, total=5000.0, guided=600.0):
 
 def mixing(rate, seed, total=5000.0, guided=600.0):
     """How the K = 3 k-NN inverse model mixes transferred and own samples at ``total`` s
-    (plain LPA; issue 27): the reachable test points split by the origin of their query's
+    (plain LPA): the reachable test points split by the origin of their query's
     neighbours (all own / mixed / all transferred), with the reaching rate of each group,
     the share of mixed neighbourhoods whose neighbours' non-shared joints (Poppy's torso,
     held at home in every transferred sample) spread by more than 0.1 rad, and scratch's
@@ -276,7 +276,7 @@ def mixing(rate, seed, total=5000.0, guided=600.0):
 
 
 def guard(rate, seed, total=5000.0, guided=600.0):
-    """Why LPA behind the guard still ends below scratch (issue 27): the final reaching rates
+    """Why LPA behind the guard still ends below scratch: the final reaching rates
     of scratch, guided exploration alone, LPA behind the guard, the guarded model's own
     samples alone, and LPA behind the guard given only the transferred samples within the
     threshold of Poppy's true kinematics (an oracle filter, as RobMech 2019 filtered by the
@@ -325,7 +325,7 @@ def guard(rate, seed, total=5000.0, guided=600.0):
 def unshared_noise(rate, seed, factor, total=5000.0, guided=600.0):
     """Whether more exploration of the joints Nao lacks (Poppy's torso, held at home by the
     guided phase and by every transferred sample) after T_guided closes the gap to scratch
-    (issue 27; §6.5.2: Poppy "continues exploring utilizing all the motors available", with
+    (§6.5.2: Poppy "continues exploring utilizing all the motors available", with
     no noise given): the final rates of scratch, guided only, LPA behind the guard and LPA,
     each exploring those joints with ``factor`` times the noise."""
     setup = prepare(rate, seed, total, guided)

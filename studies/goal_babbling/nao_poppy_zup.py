@@ -1,8 +1,8 @@
-"""Experiment 2's scene (thesis §6.5.2, issue 27): how much of Poppy's test grid each robot
+"""Experiment 2's scene (thesis §6.5.2): how much of Poppy's test grid each robot
 placement lets Poppy reach, with and without its torso, and how much the joint ranges it shares
 with Nao cover; and Nao's task box, scaled from X_bounds about the shoulders.
 
-    nice -n 10 python -m bench.nao_poppy_zup
+    nice -n 10 python -m studies.goal_babbling.nao_poppy_zup
 
 Placements: "y-up" (poppy_right_arm.toml / nao_right_arm.toml, X_bounds read in the
 simulator's y-up world, the shoulders moved to one point: today's nao_poppy.yaml) and "z-up"

@@ -1,7 +1,7 @@
 """FROZEN REFERENCE: the pure-numpy LWPR as it was before its update and prediction moved into
-compiled kernels (lpa_transfer/learners/_lwpr_kernels.py). Bench code, not library code: kept
-verbatim (only this paragraph added) as the yardstick for bench/bench_lwpr.py and for the
-equality tests in test/test_lwpr.py, which require the library's LWPR to reproduce it to
+compiled kernels (lpa_transfer/learners/_lwpr_kernels.py). Test code, not library code: kept
+verbatim (only this paragraph added) as the oracle of the equality tests in test/test_lwpr.py
+and the yardstick of bench/bench_lwpr.py; the tests require the library's LWPR to reproduce it to
 1e-9 relative. Do not edit or optimise it; the library's docstring is the maintained one.
 
 Locally Weighted Projection Regression (LWPR): incremental online nonlinear regression.
