@@ -1,23 +1,13 @@
 """Sweeps: a chapter's seeds and set-ups as tasks of a Dask cluster, merged as one run.
 
-Every seed x set-up of a chapter is a task of a Dask distributed cluster, and the tasks'
-results are merged into the outputs of one run over them all.
-
 A task is one seed's whole node graph (the chapter's ``run.sh`` with an override naming the
-seed, in its own ROS domain and run directory) or one in-process run (``python -m
-lpa_transfer.inverse_dynamics.in_process run``, one set-up and seed). Tasks run as subprocesses
-of the workers, so a worker thread is one task slot: the local cluster has as many as the
-machine has cores (``--workers``), and ``--address tcp://HOST:8786`` sends the tasks to a
-running cluster (``dask scheduler`` on one machine, ``dask worker tcp://HOST:8786 --nthreads
-N`` on each, from the project's venv; every machine holds the repository at the same path). A
-task that fails is run once more; a task that fails twice is named with the end of its log, and
-the sweep exits 1 without merging. Once every task is done, the chapter's merge
-(``merge_results.py``, or ``in_process export``/``report``) joins the tasks' results into the
-output directory, as one run over all the seeds writes them.
-
-Each graph task claims a free ROS domain in ``--domains`` (default 150-199) on its machine
-through a lock file, so concurrent tasks, and concurrent sweeps on one machine, never share
-a domain; discovery stays on the machine (``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``).
+seed, in its own ROS domain, claimed through a lock file, and its own run directory) or one
+in-process run (``python -m lpa_transfer.inverse_dynamics.in_process run``, one set-up and
+seed). Tasks run as subprocesses of the workers, a worker thread a task slot: a local cluster
+of one slot per core, or a running cluster at ``--address``. A task that fails runs once more;
+one that fails twice is named and the sweep exits 1 without merging. Otherwise the chapter's
+merge joins the tasks' results into the outputs of one run over all the seeds (docs/library.md,
+"Sweeps").
 
 Usage (``python -m lpa_transfer.sweeps``, from the repository root)::
 
