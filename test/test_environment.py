@@ -24,7 +24,7 @@ def _host_has(*flags):
 
 @pytest.mark.skipif(not _host_has("avx2", "fma"), reason="the pin applies to AVX2 + FMA hosts")
 def test_env_pins_the_blas_kernels_and_numpy_simd_level():
-    """The learners' curves depend on the BLAS kernels' rounding (bench/README.md), so every
+    """The learners' curves depend on the BLAS kernels' rounding (docs/history.md), so every
     host with AVX2 and FMA runs OpenBLAS's Haswell kernels and numpy's loops up to AVX2."""
     script = f"source {ROOT / 'tools' / 'env.sh'} && python -c '{PROBE}'"
     result = subprocess.run(["bash", "-c", script], capture_output=True, text=True, timeout=60,

@@ -64,7 +64,7 @@ def test_not_fitted_is_scikit_learns_error():
                                   "correspondence_collector", "robot_sim"])
 def test_nodes_start_without_importing_scikit_learn(node):
     """scikit-learn's import (scipy.stats through sklearn.base) would lengthen each node's
-    start (measured in bench/README.md)."""
+    start (measured in docs/history.md)."""
     code = (f"import sys, lpa_transfer_nodes.{node}\n"
             "print(sorted({k.split('.')[0] for k in sys.modules} & {'sklearn'}))\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

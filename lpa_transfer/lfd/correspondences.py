@@ -224,7 +224,7 @@ def babbling_limits(robot, demonstrator, joint_map, babble_range="shared"):
     range is wider, clipping breaks that start's continuity and neighbouring robot poses get
     far-apart demonstrator poses. On the PR2, whose upper-arm roll spans 4.7 rad against the
     human's 2.8, babbling the full box gives held-out LPA mapping errors several times those
-    of the shared box (bench/README.md); the Meka's box lies almost inside the shared one.
+    of the shared box (docs/history.md); the Meka's box lies almost inside the shared one.
     """
     if babble_range not in BABBLE_RANGES:
         raise ValueError(f"babble_range must be one of {BABBLE_RANGES}, got {babble_range!r}")
@@ -292,7 +292,7 @@ def collect_demonstrator_correspondences(robot, demonstrator, joint_map, task_fr
     starts = np.clip(joint_map.to_demonstrator(q_robot), limits[:, 0], limits[:, 1])
     # points beyond the demonstrator's reach by more than the tolerance are dropped without
     # their IK, which each would run to its last iteration (most of the PR2's babbled points
-    # for the human, bench/README.md); the other rows' IK does not depend on them (bit for bit)
+    # for the human, docs/history.md); the other rows' IK does not depend on them (bit for bit)
     tried = _within_reach(demonstrator_params, x_demo, ik_tolerance)
     q_demo, residuals = starts.copy(), np.full(n, np.inf)
     q_demo[tried], residuals[tried] = solve_many(demonstrator.forward, x_demo[tried],

@@ -101,7 +101,7 @@ def solve_many(forward, x_targets, q_starts, joint_limits, damping=0.01, toleran
     differently); a row that cannot converge (an unreachable target) runs to
     ``max_iterations`` through halvings and nudges that rounding can send to another nearby
     stalled pose (on the PR2's unreachable babbled points the residuals of the two can differ
-    by millimetres, bench/README.md).
+    by millimetres, docs/history.md).
     """
     limits = np.asarray(joint_limits, dtype=np.float64)
     targets = np.atleast_2d(np.asarray(x_targets, dtype=np.float64))

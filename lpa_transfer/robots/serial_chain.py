@@ -69,7 +69,7 @@ def _chain(robot):
 
 
 #: Up to this many rows the joints' rotations are built in one pass (the per-call overhead
-#: dominates), beyond it joint by joint (memory traffic dominates); bench/README.md.
+#: dominates), beyond it joint by joint (memory traffic dominates); docs/history.md.
 _ALL_JOINTS_AT_ONCE = 256
 
 

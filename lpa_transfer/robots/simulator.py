@@ -57,7 +57,7 @@ def elapsed(state, previous):
 
     Clock readings are step counts times the step length; the float difference of two of them
     carries a rounding error that grows with the time run, so without the rounding the same
-    seed gives other samples depending on how long the simulator ran before (bench/README.md).
+    seed gives other samples depending on how long the simulator ran before (docs/history.md).
     Every difference of two clock readings goes through here (acceleration samples, the PID
     servo's command velocity).
     """
@@ -75,7 +75,7 @@ class RobotSimulator:
     ``position_gain`` is the position motors' gain (pybullet's ``positionGains``: the share of
     the position error the motor constraint removes per step; velocity gain 1). pybullet's
     default 0.1 lets an arm whose effort limit saturates fall into a limit cycle (the §3.6
-    target arm did after some random targets); at 0.05 it settles (bench/README.md).
+    target arm did after some random targets); at 0.05 it settles (docs/history.md).
 
     ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
     (module docstring); the armature acts in torque mode with the ``"torque"`` actuator.
@@ -185,7 +185,7 @@ class RobotSimulator:
         mass, bias = self._mass_and_bias(q, qd)
         # numpy.linalg.solve's own kernel (LAPACK gesv) for one right-hand side, without its
         # argument checks, which cost more than the solve on so small a system: the same
-        # bits, and this runs at every physics step (bench/README.md)
+        # bits, and this runs at every physics step (docs/history.md)
         accel = _umath_linalg.solve1(mass + self._drive,
                                      torques - self.joint_damping * np.asarray(qd) - bias,
                                      signature="dd->d")

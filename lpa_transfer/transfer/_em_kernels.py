@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 
 #: Below this argument the C library's exp (glibc) leaves its fast path, about 4x slower per
-#: call (bench/README.md); there e^r is computed as (e^(r/2))², equal to an ulp or two. Such
+#: call (docs/history.md); there e^r is computed as (e^(r/2))², equal to an ulp or two. Such
 #: entries are below 1e-222 of their row's peak.
 _SLOW_EXP = -512.0
 

@@ -76,7 +76,7 @@ def _floored_exp(log_values):
     """exp(max(v, -700)) in place, for the log-ratios v ≤ 0 of eq. 3.9 to their row's peak.
 
     e^-700 ≈ 1e-304 is already negligible next to the peak's 1; clamping keeps exp out of
-    the denormal range, where it is much slower (bench/README.md). Far from its component a
+    the denormal range, where it is much slower (docs/history.md). Far from its component a
     point's entries sit at the floor; with a scalar exp (see :func:`_simd_exp`), when fewer
     than half of the entries are above the floor, exp runs on those only (gathered by index)
     and the others are set to e^-700. Both ways give the same bits: each entry is the same

@@ -351,7 +351,7 @@ def _cluster_members(space, weights, means, precisions, n_min):
     Points are assigned to their most responsible component (§3.5, after EM). EM may leave a
     component with fewer than N_min points; a PA fitted on so few points interpolates them
     exactly, often with huge coefficients that wreck the transfer around it (seen on the §3.6
-    link sweep, bench/README.md). Such a component's PA is fitted on its N_min most
+    link sweep, docs/history.md). Such a component's PA is fitted on its N_min most
     responsible points instead, borrowing neighbours' points, so every local map sees at
     least N_min correspondences and the EM solution is kept.
     Returns ``labels`` (N,), the most responsible component of each point, and the PAs'

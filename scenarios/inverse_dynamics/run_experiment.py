@@ -20,7 +20,7 @@ it):
   conditions of that seed), and learning from scratch runs for every seed too, so that its
   run-to-run spread is measured like the other conditions' (one scratch run is one draw: a
   1 mrad change of the start moves the youBot's final Star 1 error between 2.30 and 2.77 mm,
-  bench/README.md);
+  studies/inverse_dynamics/README.md);
 * ``random``: initialised with the target's own babbling data (its side of the pairs);
 * ``transfer-PA`` / ``transfer-LPA``: initialised with the other robot's experience of the
   same star from scratch (its first ``n_source_trials`` trials), transferred through the
