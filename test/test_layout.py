@@ -175,3 +175,58 @@ def test_node_layer_modules_functions_and_constructors_are_short(path):
             size = node.end_lineno - node.lineno + 1
             limit = constructor_limit if node.name == "__init__" else MAX_FUNCTION_LINES
             assert size <= limit, f"{path.name}: {node.name} has {size} lines, more than {limit}"
+
+
+# -- bench/ (speed only), studies/ (research programs), test/oracles/ ----------------------
+BENCH = ROOT / "bench"
+STUDIES = ROOT / "studies"
+#: bench/'s modules that are not a benchmark of their own: make bench's table, the benchmark
+#: data, the plain LPA the library is timed against, the tests' node harness; and the
+#: service round trip the multi-host scenario runs (with its shell script)
+BENCH_HELPERS = {"__init__", "table", "datasets", "reference_lpa", "ros_harness",
+                 "mapping_round_trip"}
+MAX_BENCH_LINES, MAX_BENCH_README_LINES = 2000, 200
+
+
+def test_bench_holds_speed_benchmarks_only():
+    others = [path.name for path in BENCH.iterdir()
+              if path.name not in ("README.md", "__pycache__")
+              and not (path.suffix == ".py" and (path.stem.startswith("bench_")
+                                                 or path.stem in BENCH_HELPERS))
+              and not (path.suffix == ".sh" and path.stem in BENCH_HELPERS)]
+    assert others == [], f"not speed benchmarks (studies/ or test/oracles/?): {others}"
+
+
+def test_bench_is_small_and_its_readme_is_the_table():
+    code = sum(len(path.read_text().splitlines()) for path in BENCH.iterdir()
+               if path.suffix in (".py", ".sh"))
+    assert code < MAX_BENCH_LINES, f"bench/ has {code} lines"
+    readme = (BENCH / "README.md").read_text()
+    assert len(readme.splitlines()) < MAX_BENCH_README_LINES
+    assert "## `make bench`: the speed table" in readme
+
+
+def test_neither_the_library_nor_the_nodes_nor_bench_import_a_study():
+    offenders = [str(path.relative_to(ROOT))
+                 for folder in ("lpa_transfer", "nodes", "scenarios", "bench")
+                 for path in (ROOT / folder).rglob("*.py")
+                 if any(m.split(".")[0] == "studies" for m in imported_modules(path))]
+    assert offenders == []
+
+
+def test_every_study_says_its_question_command_and_result_in_its_groups_readme():
+    """Each group of studies/ has a README whose table names every study of the group."""
+    for group in [path for path in STUDIES.iterdir() if (path / "__init__.py").exists()]:
+        readme = (group / "README.md").read_text()
+        assert "| study | question | command | result |" in readme, group.name
+        missing = [path.stem for path in group.glob("*.py") if path.stem != "__init__"
+                   and f"`{path.stem}`" not in readme]
+        assert missing == [], f"studies/{group.name}/README.md does not name {missing}"
+
+
+def test_the_frozen_oracles_sit_beside_the_tests_that_use_them():
+    for oracle in (ROOT / "test" / "oracles").glob("*.py"):
+        users = [path.name for path in (ROOT / "test").glob("test_*.py")
+                 if f"oracles\" / \"{oracle.name}\"" in path.read_text()
+                 or f"oracles/{oracle.name}" in path.read_text()]
+        assert users, f"no test uses test/oracles/{oracle.name}"
