@@ -1,4 +1,6 @@
 """Shared fixtures. The library is installed editable (tools/setup.sh), so no sys.path edits."""
+import fcntl
+import json
 import random
 import subprocess
 import sys
@@ -34,6 +36,37 @@ def project_venv():
     if Path(sys.prefix).resolve() != VENV.resolve():
         pytest.skip(f"needs the project venv {VENV} (run tools/run_tests.sh)")
     return VENV
+
+
+@pytest.fixture(scope="session")
+def shared_run(tmp_path_factory, request):
+    """``shared_run(name, make)``: the run directory and CompletedProcess of ``make(out)``, made
+    once per test session even across xdist workers (modules that only read one scenario run,
+    e.g. the 2-link graph's smoke run: test_two_link_graph_scenario.py and test_multi_host.py).
+
+    The first worker to ask makes it under a lock in the session's own temporary directory;
+    the others wait for the lock and read it. A run that raised (a timeout) leaves no result,
+    so the next one to ask makes it again."""
+    base = tmp_path_factory.getbasetemp()
+    if hasattr(request.config, "workerinput"):   # an xdist worker: pytest-N/popen-gwK
+        base = base.parent                       # pytest-N, this session's, shared by workers
+    made = {}
+
+    def get(name, make):
+        if name in made:
+            return made[name]
+        home = base / f"shared-{name}"
+        home.mkdir(exist_ok=True)
+        done = home / "completed.json"
+        with open(home / "lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)     # released when the file closes
+            if not done.exists():
+                result = make(home / "run")
+                done.write_text(json.dumps([result.args, result.returncode, result.stdout,
+                                            result.stderr]))
+        made[name] = home / "run", subprocess.CompletedProcess(*json.loads(done.read_text()))
+        return made[name]
+    return get
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -37,9 +37,11 @@ def multi_host(out, *extra):
 
 
 @pytest.fixture(scope="module")
-def one_host(tmp_path_factory):
-    out = tmp_path_factory.mktemp("one_host") / "run"
-    result = run_scenario(ROOT / "scenarios" / "two_link_graph", out, timeout=240)
+def one_host(shared_run):
+    """The 2-link graph's smoke run on one host, the one test_two_link_graph_scenario.py
+    reads (made once a session)."""
+    from test_two_link_graph_scenario import run_smoke
+    out, result = shared_run("two_link_graph_smoke", run_smoke)
     assert result.returncode == 0, result.stdout + result.stderr
     return out
 

@@ -21,10 +21,14 @@ NODE_LOGS = ("recorder", "lpa_mapping", "source_sim", "target_sim", "corresponde
 pytestmark = pytest.mark.slow     # scenario runs over the node graph
 
 
+def run_smoke(out):
+    """The 2-link graph's smoke run: made once a session (test_multi_host.py reads it too)."""
+    return run_scenario(SCENARIO, out, timeout=240)
+
+
 @pytest.fixture(scope="module")
-def smoke_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("graph") / "run"
-    return out, run_scenario(SCENARIO, out, timeout=240)
+def smoke_run(shared_run):
+    return shared_run("two_link_graph_smoke", run_smoke)
 
 
 def test_scenario_runs_and_stops_every_node_cleanly(smoke_run):
