@@ -1,29 +1,23 @@
 """Experiment 2 of thesis ch. 6 (§6.5.2, Nao -> Poppy) in process, on the analytic arms, at
 several movement rates: how the number of movements a simulated second changes learning
-from scratch and the benefit of transfer. scenarios/goal_babbling/nao_poppy.yaml chose its
-rate (4 a second) from the scratch rows of this table: the rate at which our scratch
-learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
+from scratch and the benefit of transfer. nao_poppy.yaml's rate (4 a second) is the one at
+which our scratch learner ends near the thesis' scratch (reaching rate about 0.81 at 5000 s).
 
     nice -n 10 python -m studies.goal_babbling.nao_poppy_rates --rates 2 3 4 10 --seeds 0 1
 
-The robots, homes, boxes, test points (200 000 joint samples), threshold, guided
-exploration's target_range, LPA and guard are those of nao_poppy.yaml; Nao babbles with its
-4 shared joints. The pieces are the library's
-(the graph runs the same ones in separate processes, on pybullet): this is kinematic, not
-physical, and its seeds are not the graph's. Not run in CI: one rate and seed takes ~20-60 s.
-Prints, per rate and seed, the reaching rate every 600 s for scratch, guided exploration
-alone (no transfer), LPA transfer, and LPA transfer behind the guard.
+Robots, homes, boxes, test points (200 000 joint samples), threshold, guided exploration, LPA
+and guard are nao_poppy.yaml's; Nao babbles with its 4 shared joints. Kinematic, not physical
+(the graph runs the same library pieces on pybullet), and its seeds are not the graph's; one
+rate and seed takes ~20-60 s. Prints, per rate and seed, the reaching rate every 600 s for
+scratch, guided exploration alone, LPA transfer and LPA transfer behind the guard.
 
-``--override FILE`` merges a scenario override (e.g. nao_poppy_zup.yaml, the thesis' z-up
-scene) into nao_poppy.yaml. ``--accuracy`` prints instead what caps the transfer:
-the transferred samples' error against Poppy's true kinematics (shares within 1 / 5 / 10 /
-15 mm), and the share of the reachable test points near (within the threshold of) a
-transferred sample, an accurate one (error within the threshold), and one of scratch's own
-samples after ``total`` s. ``--mixing`` prints how the k-NN inverse model mixes
-transferred and own samples at the end (:func:`mixing`), ``--guard`` what the guard retires
-and what LPA behind it would reach with accurate samples only (:func:`guard`).
-``--unshared-noise K`` the final rates when every condition, scratch too, explores the joints
-Nao lacks with K times the exploration noise (:func:`unshared_noise`).
+``--override FILE`` merges a scenario override (e.g. nao_poppy_zup.yaml) into nao_poppy.yaml.
+Instead of the rates: ``--accuracy`` what caps the transfer (the transferred samples' error
+against Poppy's kinematics, and which reachable test points lie near a transferred, an
+accurate or an own sample), ``--mixing`` how the k-NN model mixes transferred and own samples
+(:func:`mixing`), ``--guard`` what the guard retires (:func:`guard`), ``--unshared-noise K``
+the final rates when every condition explores the joints Nao lacks with K times the
+exploration noise (:func:`unshared_noise`).
 """
 import argparse
 import os

@@ -2,25 +2,16 @@
 """What a better mapping could save on chapter 5 (which factor caps the saving, and by how
 much): the final set-up's transfer with parts of the mapped data replaced by the truth.
 
-For each seed the babbling session and the mappings of a set-up of ``inverse_dynamics.in_process``
-(``--setup``: ``zero_answer``, the twenty-trial references' choice, or ``zero_spline_mj``,
-config.yaml's final one) are rebuilt, the source's experience of each star from
-scratch is mapped, and the target learns the star (as transfer-PA does) from initial data in
-which part of what the mapping gave is replaced by the truth:
-
-* ``<M> states, true τ``: the mapped (q, q̇, q̈), with the torques the target's own dynamics
-  give there (``RobotSimulator.inverse_dynamics``): the mapping's torque error removed;
-* ``own states, <M> τ``: the target's own (q, q̇, q̈) of the same trial and period (the
-  task's true correspondences, ``id_seed_accuracy.py``), with the mapped torques: the
-  mapping's state error removed;
-* ``own data``: the target's own experience of the star (both removed: a mapping without
-  error; the same for every seed, learning from scratch being deterministic).
-
-<M> is PA (``--methods``, also LPA). The savings are §5.5.3's (analysis.convergence_table,
-the mean curves, within 10 % of scratch's final error), each condition taking transfer-PA's
-place beside the same seeds' learning from scratch and random initialisation read from the
-same set-up's kept runs (``--kept``); the seed-by-seed saving and its Wilcoxon test against
-random as analysis.per_seed_savings gives them.
+For each seed the babbling session and the mappings of an ``inverse_dynamics.in_process``
+set-up (``--setup``: ``zero_answer`` or ``zero_spline_mj``, config.yaml's final one) are
+rebuilt, the source's star experience from scratch is mapped, and the target learns the star
+(as transfer-PA does) from initial data with part of the mapping's output replaced by the truth:
+``<M> states, true τ`` (the target's own dynamics at the mapped states: no torque error),
+``own states, <M> τ`` (the target's own states of the same trial and period, the task's true
+correspondences: no state error), ``own data`` (a mapping without error). <M> is PA
+(``--methods``, also LPA). The savings are §5.5.3's (analysis.convergence_table, mean curves,
+within 10 % of scratch's final error), beside the same seeds' scratch and random runs kept in
+``--kept``, with the seed-by-seed saving and its Wilcoxon test against random.
 
 Usage (repository root, after ``source tools/env.sh``)::
 

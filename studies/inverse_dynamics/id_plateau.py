@@ -2,44 +2,22 @@
 """Why do initialised youBot learners level off above learning from scratch? (thesis §5.5.3)
 
 Usage: ``python -m studies.inverse_dynamics.id_plateau [--seed S] [--trials N] [--target youbot]
-[--stars ...] [--variants default norm_out=1 ...]``, from the repository root.
+[--stars ...] [--variants default norm_out=1 ...] [--swap] [--start-noise SIGMA --starts K
+[--reference DIR]]``, from the repository root; in process, library only, deterministic.
 
-In process, with the library only (no ROS), the scenario of
-``scenarios/inverse_dynamics/config.yaml`` as ``id_transfer_headroom.py`` builds it: for each
-star, the target learns the star from scratch, from its own babbling data (random) and from the
-source's experience mapped by PA followed by its own babbling (own+transfer-PA). Each variant
-changes LWPR hyperparameters of every condition's learner (``name=value``, the value parsed as
-JSON; ``default`` changes nothing). Printed per condition: the tracking error of the first and
-last trials (mm), and after the last trial the output normalisation LWPR chose
-(``norm_out_``: the torque spread of the first batch it learned, so 1 for a learner that learns
-sample by sample from the start), the receptive fields per output, the median RF width on
-the task, 1/sqrt(D_jj) over the input dimensions of the RFs most activated by the last trial's
-inputs (normalised input units), and the share of the last trial's activation (summed over
-its inputs, outputs and RFs above LWPR's cutoff) that falls on RFs created while the learner
-was initialised; and how far the learner's own task data lie from the desired states: the
-median over its samples of the distance of (q, q̇, q̈) to the nearest desired state of the
-star (normalised input units), in all trials and in the last one.
+For each star the target learns from scratch, from its own babbling (random) and from PA-mapped
+source experience plus its own babbling (own+transfer-PA), under LWPR variants (``name=value``,
+JSON values; ``default`` changes nothing). Printed per condition: first and last trials' error
+(mm) and, after the last trial, LWPR's ``norm_out_``, receptive fields per output, their median
+width on the task, the share of the last trial's activation on fields the initial data made,
+and how far the learner's own data lie from the desired states (normalised input units).
 
-``--swap`` then separates the initial data from the data each learner collected: for every
-pair of ``--conditions``, a fresh learner (``norm_out=1`` so that all scale alike) initialised
-with the first condition's initial data, then given offline, in order, the task experience
-that the second condition's learner collected in its trials, and evaluated on one trial
-without learning (with the default conditions, 3 x 3). If some initial data harm the model,
-the learners initialised with them are worse on the same experience; if the experience is
-what differs, the learners given one condition's experience are worse whatever their
-initialisation.
-
-``--start-noise SIGMA`` asks how much learning from scratch itself varies: it is one
-deterministic run, whereas the initialised conditions vary with the babbling seed. ``--starts``
-more uninitialised learners learn the star from rest at the centre with every joint moved by
-N(0, SIGMA) rad (seeded by the seed and the start's index), and their first and last trials are
-printed beside the unperturbed one. With ``--reference DIR`` (a chapter 5 run or reference
-result with a learning_curves.csv, e.g. scenarios/inverse_dynamics/reference_results) it then
-prints that result's convergence table and training time saved again (run_experiment's own
-computation), with learning from scratch taken as all these scratch runs instead of the one
-unperturbed run: how much the thesis' measure depends on which draw learning from scratch is.
-
-Deterministic: the same seed prints the same numbers.
+``--swap`` separates initial data from collected experience: for every pair of conditions a
+fresh learner gets the first's initial data, then offline the second's experience, and runs
+one trial without learning. ``--start-noise`` asks how much learning from scratch varies:
+``--starts`` more scratch learners start from rest moved by N(0, SIGMA) rad per joint; with
+``--reference`` (a run with a learning_curves.csv) the convergence table and time saved are
+recomputed with all those scratch runs as learning from scratch.
 """
 import argparse
 import json
