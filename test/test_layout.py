@@ -198,9 +198,9 @@ def test_bench_holds_speed_benchmarks_only():
 
 
 def test_bench_is_small_and_its_readme_is_the_table():
-    code = sum(len(path.read_text().splitlines()) for path in BENCH.iterdir()
-               if path.suffix in (".py", ".sh"))
-    assert code < MAX_BENCH_LINES, f"bench/ has {code} lines"
+    lines = sum(len(path.read_text().splitlines()) for path in BENCH.iterdir()
+                if path.suffix in (".py", ".sh", ".md"))
+    assert lines < MAX_BENCH_LINES, f"bench/ has {lines} lines"
     readme = (BENCH / "README.md").read_text()
     assert len(readme.splitlines()) < MAX_BENCH_README_LINES
     assert "## `make bench`: the speed table" in readme
