@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Where do the chapter 5 learners' receptive fields lie after learning?
 
-Usage: ``python -m studies.inverse_dynamics.id_fields [--setup S] [--seed N] [--trials 15] [--targets ...]
-[--stars ...] [--every-trial]``, from the repository root.
+Usage: ``python -m studies.inverse_dynamics.id_fields [--setup S] [--seed N] [--trials 15]
+[--targets ...] [--stars ...] [--every-trial]``, from the repository root.
 
 For one set-up of ``inverse_dynamics.in_process`` and one babbling seed, each target robot and star
 learns the star from scratch and from each initial data set of §5.5.3 (random, transfer-PA,

@@ -15,7 +15,8 @@ within 10 % of scratch's final error), beside the same seeds' scratch and random
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m studies.inverse_dynamics.id_mapping_ceiling run --seed N [--setup S] [--trials 20] [--out DIR] [--parts]
+    python -m studies.inverse_dynamics.id_mapping_ceiling run --seed N [--setup S] [--trials 20]
+        [--out DIR] [--parts]
     python -m studies.inverse_dynamics.id_mapping_ceiling report [--out DIR] [--kept DIR] [--parts]
 
 ``--parts`` runs, kept apart, which of the mapped state's parts keeps the saving down:
@@ -28,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.inverse_dynamics.in_process import BABBLING_SECONDS, SETUPS, TOLERANCE, load, set_up
+from lpa_transfer.inverse_dynamics.in_process import (BABBLING_SECONDS, SETUPS, TOLERANCE, load,
+                                                      set_up)
 from studies.inverse_dynamics.id_seed_accuracy import experiences
 from studies.inverse_dynamics.id_transfer_headroom import MOVING
 from lpa_transfer.inverse_dynamics.analysis import convergence_table, per_seed_savings

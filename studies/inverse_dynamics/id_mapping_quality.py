@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """How well do PA and LPA map held-out inverse-dynamics correspondences (thesis §5.4)?
 
-Usage: ``python -m studies.inverse_dynamics.id_mapping_quality RUN_DIR [SEED]`` on a chapter 5 run directory
+Usage: ``python -m studies.inverse_dynamics.id_mapping_quality RUN_DIR [SEED]`` on a chapter 5 run
+directory
 (``scenarios/inverse_dynamics/run.sh``): the pairs ``pairs_<SEED>_*.npz`` (default seed 0)
 are split into 6 blocks of consecutive pairs (whole babbling lines), each held out once; the
 models are fitted on the rest with the experiment's settings (latent_dim 16, LPA clustered

@@ -17,7 +17,8 @@ default the final set-up's 10 seeds in process), each seed's curves alone
 
 Usage (repository root, after ``source tools/env.sh``)::
 
-    python -m studies.inverse_dynamics.id_seed_accuracy [--seeds 0 1 ...] [--trials 20] [--run RUN_DIR]
+    python -m studies.inverse_dynamics.id_seed_accuracy [--seeds 0 1 ...] [--trials 20]
+        [--run RUN_DIR]
 """
 import argparse
 import json

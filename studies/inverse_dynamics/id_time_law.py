@@ -4,7 +4,8 @@ today's LWPR settings or others (``--lwpr``: JSON of LWPR hyperparameters replac
 config's, e.g. the thesis' init_D 30 without normalisation and the reference library's
 empty prediction: '{"init_D": 30, "norm_in": 1, "empty_prediction": "zero"}').
 
-    nice -n 10 python -m studies.inverse_dynamics.id_time_law [--trials 15] [--targets youbot pincher]
+    nice -n 10 python -m studies.inverse_dynamics.id_time_law [--trials 15]
+        [--targets youbot pincher]
         [--time-laws minimum_jerk linear] [--lwpr JSON] [--actuator velocity_motor]
 
 For each robot and star of scenarios/inverse_dynamics/config.yaml, a learner from scratch

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """How much of the chapter 5 transfer is lost in the mapping? (thesis §5.4, §5.5.3)
 
-Usage: ``python -m studies.inverse_dynamics.id_transfer_headroom [--seed S] [--trials N] [--targets pincher youbot]
-[--stars star1 star2]``, from the repository root.
+Usage: ``python -m studies.inverse_dynamics.id_transfer_headroom [--seed S] [--trials N]
+[--targets pincher youbot] [--stars star1 star2]``, from the repository root.
 
 In process, with the library only (no ROS), from ``scenarios/inverse_dynamics/config.yaml``:
 for each target robot and star, the babbling of experiment seed S (both robots track the same
@@ -34,7 +34,8 @@ from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
 from lpa_transfer.inverse_dynamics.interpolation import interpolated
 from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
 
-from studies.inverse_dynamics.id_mapping_quality import held_out_predictions   # the same held-out blocks
+# the same held-out blocks
+from studies.inverse_dynamics.id_mapping_quality import held_out_predictions
 
 MOVING = 1e-3          # a column whose spread is below this is a joint the babbling leaves still
 

@@ -4,7 +4,8 @@ seeds used to choose (0 and 1; seeds 10-19 confirm the chosen one, in_process ru
 
 Usage, from the repository root::
 
-    python -m studies.inverse_dynamics.id_yielding run --seed N [--designs D ...] [--trials 20] [--out DIR]
+    python -m studies.inverse_dynamics.id_yielding run --seed N [--designs D ...] [--trials 20]
+        [--out DIR]
     python -m studies.inverse_dynamics.id_yielding report [--out DIR]
 
 Every design initialises the target's LWPR with the source's 15 trials from scratch mapped by

@@ -13,7 +13,8 @@ file as it is and with its joint drives (armature, damping) set to zero, and pri
 * sat %: share of control periods in which some joint is at its effort limit;
 * flips: control periods whose torque jumps from one limit to the opposite one (chatter).
 
-Usage: python -m studies.inverse_dynamics.pid_stability [--robots youbot_arm pincher_arm] [--rates 100 1000]
+Usage: python -m studies.inverse_dynamics.pid_stability [--robots youbot_arm pincher_arm]
+                                     [--rates 100 1000]
                                      [--drives file none armature]
 (``armature``: the file's armature without its damping). About a minute for everything;
 most of it is inverse kinematics of the desired paths.

@@ -1,4 +1,5 @@
-"""Pairing residuals of every scenario's correspondence collection, before and after the pairing check.
+"""Pairing residuals of every scenario's correspondence collection, before and after the
+pairing check.
 
 Runs each collection in process, as its node runs it over the graph (the tests check that the
 two give the same pairs bit for bit), once the way the collector worked before the pairing
