@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
 from lpa_transfer.robots.control import PID  # noqa: E402

@@ -44,7 +44,7 @@ from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.params import load_robot_params
 from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "scenarios"
 BEFORE = PairCheck(max_settle_steps=0, tolerance=np.inf)     # the collector before the check
 AFTER = PairCheck()
