@@ -93,7 +93,7 @@ def _pairwise_sum(values, n):
 
 
 @njit(cache=True)
-def quadratic_features(X, centre):
+def quadratic_feature_rows(X, centre):
     """The (d(d+1)/2 + d, N) features of gmm.quadratic_features (row-major, one row per
     feature) of the rows of X less ``centre``: x_i x_j for i <= j in the order of
     np.triu_indices(d), then x."""
@@ -172,7 +172,7 @@ def count_at_least(values, threshold):
 
 
 @njit(cache=True)
-def collect_pairs(gamma, threshold, first_row, points, components, weights, size):
+def responsible_pairs(gamma, threshold, first_row, points, components, weights, size):
     """Appends the entries of ``gamma`` (R, K) with γ ≥ ``threshold`` at ``size`` in
     ``points`` (their row + ``first_row``), ``components`` and ``weights``, point by point in
     increasing k. Returns the new size."""

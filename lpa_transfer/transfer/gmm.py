@@ -52,7 +52,7 @@ def quadratic_features(X, centre=None):
     """
     if centre is None:
         centre = np.zeros(X.shape[1])
-    return _transfer_kernels.quadratic_features(X, np.asarray(centre, dtype=float)).T
+    return _transfer_kernels.quadratic_feature_rows(X, np.asarray(centre, dtype=float)).T
 
 
 def _simd_exp():

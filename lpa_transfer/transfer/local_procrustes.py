@@ -321,7 +321,7 @@ class _SparseTerms:
             return
         pairs = (np.empty(n_kept, dtype=np.intp), np.empty(n_kept, dtype=np.intp),
                  np.empty(n_kept))
-        _transfer_kernels.collect_pairs(gamma, _NEGLIGIBLE_RESPONSIBILITY, rows.start or 0,
+        _transfer_kernels.responsible_pairs(gamma, _NEGLIGIBLE_RESPONSIBILITY, rows.start or 0,
                                         *pairs, 0)
         self.pending.append(pairs)
         self.size += n_kept
