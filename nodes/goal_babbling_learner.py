@@ -5,20 +5,12 @@ Run (next to a robot_sim in position mode, lock-step, in the same namespace):
 -p robot:=scenarios/robots/goal_babbling_target.toml -p home:=[-0.785398,1.65]
 -p x_low:=[0.1,-1.1] -p x_high:=[1.1,0.4]``.
 
-The node is the rclpy adapter of one learner of
-:func:`lpa_transfer.goal_babbling.experiment.run_condition`: online goal babbling (Alg. 6,
-:class:`lpa_transfer.goal_babbling.goal_babbling.GoalBabbling`) on the robot through its
-StepRobot service, into a K-nearest-neighbour inverse model L⁻¹
-(:mod:`lpa_transfer.learners.sensorimotor`). ``~/initialise`` initialises the model offline
-(§6.4, Fig. 6-3) with the robot's own samples (e.g. of guided exploration) and with
-experience transferred from another robot, optionally behind the guard against negative
-transfer (:class:`lpa_transfer.goal_babbling.negative_transfer.GuardedModel`, §6.6);
-the action ``~/babble`` goal-babbles for some simulated seconds (feedback at every
-evaluation, cancel between steps). Progress is measured as in §6.5
-(:mod:`lpa_transfer.goal_babbling.reaching`): the mean reaching error and the reaching rate of
-L⁻¹ on test points in the reachable part of a task box, executed on the robot's ANALYTIC
-forward kinematics (evaluating never moves the simulated robot), published on
-``reaching_evaluation``.
+One learner of :func:`lpa_transfer.goal_babbling.experiment.run_condition`: goal babbling
+(Alg. 6) on the robot through its StepRobot service into a K-NN inverse model. ``~/initialise``
+adds own samples and experience transferred from another robot (§6.4), learned like own data,
+behind the guard (``guard``, §6.6) or yielding to the own samples (``yielding``); ``~/babble``
+goal-babbles for some simulated seconds. Progress as in §6.5: reaching error and rate of L⁻¹
+on reachable test points, on the analytic kinematics (the robot never moves for it).
 
 Parameters, topics, services and the learner's clock: docs/nodes.md.
 """
@@ -32,12 +24,12 @@ from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from lpa_transfer.robots.kinematics import robot_kinematics
+from lpa_transfer.robots.kinematics import hold_at_home, robot_kinematics
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer._validation import check_x_bounds
-from lpa_transfer.robots.kinematics import hold_at_home
 from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz
 from lpa_transfer.goal_babbling.transfer import initialise_with_transfer
+from lpa_transfer.goal_babbling.yielding import YieldingModel
 from lpa_transfer.goal_babbling.reaching import (evaluation_points, reaching_errors,
                                                  reaching_rate)
 from lpa_transfer.robots.environment import stepped_environment, task_dims
@@ -87,7 +79,9 @@ LEARNING = GOAL_BABBLING + (
      "covered or contradicted by own data) instead of learning them like own data"),
     ("guard_params", "{}", "JSON object of GuardedModel's hyperparameters; lipschitz defaults "
      "to the robot's chain_lipschitz; ignored when guard is false",
-     dict(additional_constraints="keys from " + ", ".join(GUARD_KEYS))))
+     dict(additional_constraints="keys from " + ", ".join(GUARD_KEYS))),
+    ("yielding", False, "take transferred samples into a YieldingModel: the own samples alone "
+     "answer within reaching_threshold of a query and steer exploration (not with guard)"))
 EVALUATION = (
     *((f"eval_{end}", DOUBLES, f"the {end} corner of the test points' box (m); unset: "
        f"X_bounds' {end} corner") for end in ("low", "high")),
@@ -131,6 +125,7 @@ class GoalBabblingLearner(Node):
         self.steps_per_sample = learning["steps_per_sample"]
         self.n_neighbors = learning["n_neighbors"]
         self.guard = self.guard_spec(learning["guard"], learning["guard_params"])
+        self.yielding = learning["yielding"]
         p = declare_table(self, EVALUATION)
         self.eval_spacing, self.threshold = p["eval_spacing"], p["reaching_threshold"]
         self.call_timeout, self.wait_timeout = p["call_timeout"], p["wait_timeout"]
@@ -172,7 +167,8 @@ class GoalBabblingLearner(Node):
             f"{self.robot.name}: goal babbling in X_bounds {self.x_bounds[0].tolist()} .. "
             f"{self.x_bounds[1].tolist()} from home {self.kinematics.home.tolist()}, "
             f"{len(self.points)} test points, "
-            + ("guarded " if self.guard is not None else "") + f"{self.n_neighbors}-NN model")
+            + ("guarded " if self.guard is not None else "yielding " if self.yielding else "")
+            + f"{self.n_neighbors}-NN model")
 
     # -- configuration -------------------------------------------------------------------------
     def guard_spec(self, guard, text):
@@ -213,8 +209,12 @@ class GoalBabblingLearner(Node):
                             **dict(self.babbling_params, seed=self.seed))
 
     def fresh_model(self):
-        """A sensorimotor model that knows nothing yet (inverse only, K-NN; guarded or not)."""
+        """A sensorimotor model knowing nothing yet (inverse K-NN; guarded, yielding or plain)."""
         model = make_sensorimotor_model("knn", forward=False, n_neighbors=self.n_neighbors)
+        if self.yielding and self.guard is not None:
+            raise ValueError("guard and yielding exclude each other: set one of them")
+        if self.yielding:
+            return YieldingModel(model, gate_radius=self.threshold)
         return model if self.guard is None else GuardedModel(model, **self.guard)
 
     def start_afresh(self, seed=-1):
@@ -289,9 +289,9 @@ class GoalBabblingLearner(Node):
         d = self.robot.n_joints
         if len(own):
             self.model.update(own[:, :d], own[:, d:])
-        if len(transferred):   # guarded, or like own data with weight 1 (§6.4, §6.5.1)
+        if len(transferred):   # kept apart, or like own data with weight 1 (§6.4, §6.5.1)
             initialise_with_transfer(self.model, transferred[:, :d], transferred[:, d:])
-            if self.guard is None:
+            if not hasattr(self.model, "transfer"):
                 self.n_transferred += len(transferred)
         self.clock_offset += elapsed
         response.n_own, response.n_transferred = len(own), len(transferred)
@@ -357,7 +357,7 @@ class GoalBabblingLearner(Node):
     # -- evaluation ----------------------------------------------------------------------------
     def counts(self):
         """(own samples, active transferred samples) in the inverse model."""
-        if isinstance(self.model, GuardedModel):
+        if isinstance(self.model, (GuardedModel, YieldingModel)):
             own = getattr(self.model.model.inverse, "n_samples_", 0)
             return own, self.model.n_active_
         total = getattr(self.model.inverse, "n_samples_", 0)

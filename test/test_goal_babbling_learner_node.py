@@ -291,3 +291,11 @@ def test_a_cancelled_babble_ends_at_the_next_step_and_keeps_what_it_learned(lear
     assert after.success, after.message
     assert after.evaluations[-1].learning_time > clock            # it babbled on from there
     assert after.evaluations[-1].learning_time < 50.0
+
+
+def test_a_learner_both_guarded_and_yielding_does_not_start(tmp_path):
+    learner = NodeProcess("goal_babbling_learner", unique_domain_id(), tmp_path, ros_params(
+        **dict(LEARNER, guard=True, yielding=True)))
+    learner.process.wait(timeout=30)
+    assert learner.stop() == 1
+    assert "guard and yielding exclude each other" in learner.log()

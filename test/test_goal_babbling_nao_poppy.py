@@ -18,7 +18,7 @@ pytestmark = pytest.mark.slow     # scenario runs over the node graph
 
 
 # -- experiment 2 (§6.5.2): Nao -> Poppy, nao_poppy.yaml with the same smoke override ----------
-NAO_POPPY = ("scratch", "LPA/T20", "LPA-guarded/T20")
+NAO_POPPY = ("scratch", "LPA/T20", "LPA-guarded/T20", "LPA-yielding/T20")
 
 
 @pytest.fixture(scope="module")
@@ -79,8 +79,8 @@ def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
     wrist = [deserialize_message(m.data, JointState).position[4] for m in read_messages(
         nao_poppy_run / "run.mcap", topics=["/source/joint_states"])]
     assert len(wrist) > 240 and np.abs(wrist).max() < 1e-3
-    # the empty model's evaluation, then 3 of each of the 3 target runs
-    assert topics["/target/reaching_evaluation"].message_count == 10
+    # the empty model's evaluation, then 3 of each of the 4 target runs
+    assert topics["/target/reaching_evaluation"].message_count == 3 * len(NAO_POPPY) + 1
 
 
 def test_nao_poppy_in_the_thesis_z_up_scene(tmp_path):
@@ -96,7 +96,7 @@ def test_nao_poppy_in_the_thesis_z_up_scene(tmp_path):
     assert settings["robot_files"]["target"].endswith("poppy_right_arm_zup.toml")
     assert settings["x_bounds"] == [[0.1, 0.4, -0.3], [0.4, 0.8, -0.05]]
     assert sorted(curves) == sorted(("scratch", "LPA/T20", "LPA-guarded/T20", "PA/T20",
-                                     "PA-guarded/T20"))
+                                     "PA-guarded/T20", "LPA-yielding/T20", "PA-yielding/T20"))
     for name in ("LPA/T20", "PA/T20"):
         assert curves[name][0]["mean_error"][-1] < 0.9 * curves["scratch"][0]["mean_error"][-1]
     report = (out / "report.txt").read_text()

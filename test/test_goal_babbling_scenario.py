@@ -15,7 +15,8 @@ from lpa_transfer.robots.params import load_robot_params
 from ros_harness import run_scenario
 
 SCENARIO = ROOT / "scenarios" / "goal_babbling"
-CONDITIONS = ("scratch", "PA/T20", "PA-guarded/T20", "LPA/T20", "LPA-guarded/T20")
+CONDITIONS = ("scratch", "PA/T20", "PA-guarded/T20", "PA-yielding/T20", "LPA/T20",
+              "LPA-guarded/T20", "LPA-yielding/T20")
 
 pytestmark = pytest.mark.slow     # scenario runs over the node graph
 
@@ -41,6 +42,8 @@ def test_every_condition_is_evaluated_on_the_learning_clock(smoke_run):
     assert curves["LPA/T20"][0]["n_transferred"] == [600] * 3
     guarded = curves["LPA-guarded/T20"][0]["n_transferred"]
     assert guarded[-1] < guarded[0] <= 600
+    # the yielding learner keeps them all, as a prior its own samples override
+    assert curves["LPA-yielding/T20"][0]["n_transferred"] == [600] * 3
     scratch = curves["scratch"][0]
     assert scratch["mean_error"][-1] < scratch["mean_error"][0]   # babbling learns
     # Transfer helps early (measured at 20 s: mean error scratch 117 mm, PA 55, LPA 93; reaching
@@ -49,7 +52,7 @@ def test_every_condition_is_evaluated_on_the_learning_clock(smoke_run):
         assert curves[name][0]["mean_error"][0] < scratch["mean_error"][0], name
         assert curves[name][0]["rate"][0] > scratch["rate"][0], name
     with open(smoke_run / "learning_curves.csv") as handle:
-        assert len(list(csv.DictReader(handle))) == 5 * 3
+        assert len(list(csv.DictReader(handle))) == len(CONDITIONS) * 3
 
 
 def test_guided_exploration_pairs_and_the_bag(smoke_run):
@@ -63,8 +66,8 @@ def test_guided_exploration_pairs_and_the_bag(smoke_run):
     assert np.abs(source[:, :2] - target[:, :2]).max() <= 1e-3   # true same_command pairs
     topics = summary(smoke_run / "run.mcap")
     assert topics["/correspondences"].message_count == 200
-    # 3 evaluations of each of the 5 target runs, and the empty model's before scratch starts
-    assert topics["/target/reaching_evaluation"].message_count == 16
+    # 3 evaluations of each of the 7 target runs, and the empty model's before scratch starts
+    assert topics["/target/reaching_evaluation"].message_count == 3 * len(CONDITIONS) + 1
     assert topics["/source/reaching_evaluation"].message_count >= 1
     for name in ("report.txt", "fig6_6_7_learning_curves.png", "fig6_5_task_spaces.png"):
         assert (smoke_run / name).stat().st_size > 0, name

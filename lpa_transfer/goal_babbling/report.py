@@ -24,8 +24,8 @@ from lpa_transfer.robots.params import load_robot_params
 
 
 SETTINGS = ("seeds_done", "source_seconds", "total_seconds", "guided_seconds", "interval",
-            "methods", "guarded", "reaching_threshold", "transfer_from_guided", "robot_files",
-            "target_home", "x_bounds", "eval_spacing", "eval_joint_samples", "steps_per_second",
+            "methods", "guarded", "yielding", "reaching_threshold", "transfer_from_guided",
+            "robot_files", "target_home", "x_bounds", "eval_spacing", "eval_joint_samples", "steps_per_second",
             "thesis")
 
 

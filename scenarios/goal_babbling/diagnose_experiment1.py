@@ -38,6 +38,8 @@ def main():
                         help="T_guided of the plain LPA runs")
     parser.add_argument("--variants", nargs="*", default=list(VARIANTS_LATE))
     parser.add_argument("--no-scratch", action="store_true")
+    parser.add_argument("--no-plain", action="store_true",
+                        help="no plain LPA runs at the --guided times (only --yielding ones)")
     parser.add_argument("--yielding", nargs="*", default=[], choices=["own", "gated"],
                         help="also LPA into a YieldingModel exploring so, at every --guided")
     parser.add_argument("--modes", nargs="+", default=["kinematic", "physics"],
@@ -54,8 +56,9 @@ def main():
             runs = {} if args.no_scratch else {
                 "scratch": dx.run_scratch(config, seed, physics=physics)}
             for guided in args.guided:
-                runs[f"LPA/T{guided:g}"] = dx.run_transfer_condition(config, seed, guided,
-                                                                     physics=physics)
+                if not args.no_plain:
+                    runs[f"LPA/T{guided:g}"] = dx.run_transfer_condition(
+                        config, seed, guided, physics=physics)
                 for explore in args.yielding:
                     runs[f"LPA-yielding-{explore}/T{guided:g}"] = dx.run_transfer_condition(
                         config, seed, guided, physics=physics,

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Thesis ch. 6, experiment 1 (§6.5.1) over the ROS 2 node graph: a 2-link target arm learns
 # its inverse kinematics by goal babbling, from scratch or after guided exploration and
-# transfer of a 2-link source arm's experience (PA, LPA; with and without the guard against
-# negative transfer). Two robot_sim nodes in position mode, three goal_babbling_learner nodes,
+# transfer of a 2-link source arm's experience (PA, LPA; plain, behind the guard against
+# negative transfer, or yielding to the own samples). Two robot_sim nodes in position mode,
+# four goal_babbling_learner nodes,
 # the correspondence collector in guided-exploration mode, lpa_mapping and the recorder; every
 # node is its own process with its own log; everything is recorded.
 #
@@ -32,8 +33,10 @@ start source_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/source -r __
     $(sim_time source)
 start target_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target -r __node:=learner \
     $(sim_time target)
-start target_guarded_learner goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target \
-    -r __node:=guarded_learner $(sim_time target)
+for variant in guarded yielding; do
+    start "target_${variant}_learner" goal_babbling_learner "${PARAMS[@]}" -r __ns:=/target \
+        -r "__node:=${variant}_learner" $(sim_time target)
+done
 PAIRS=()
 for seed in $SEEDS; do   # guided exploration with the target's babbling seed of this run
     target_seed=$(python -c "from lpa_transfer.goal_babbling.seeds import derived_seeds

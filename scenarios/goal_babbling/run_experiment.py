@@ -99,6 +99,9 @@ class Experiment(Node):
                                     additional_constraints="from pa, lpa"))
         self.guarded = declare(self, "guarded", True, "also run every transfer condition on "
                                "/target/guarded_learner (the guard against negative transfer)")
+        self.yielding = declare(self, "yielding", False, "also run every transfer condition on "
+                                "/target/yielding_learner (transferred samples yield to the "
+                                "own ones)")
         self.reaching_threshold = declare(self, "reaching_threshold", 0.01, "the learners' "
                                           "reaching threshold (m), for the report",
                                           range=(0.0, None), finite=True)
@@ -178,7 +181,7 @@ class Experiment(Node):
 
     def run(self, pair_files):
         services = ["/source/learner/babble", "/target/learner/babble", "/lpa_mapping/fit"]
-        services += ["/target/guarded_learner/babble"] if self.guarded else []
+        services += [f"/target/{variant}_learner/babble" for variant in self.variants()[1:]]
         wait_for_services([self.mapping.client("fit") if s.endswith("fit")
                            else self.calls.action_client(GoalBabble, s) for s in services],
                           60, self.stop, self.spinner)
@@ -212,9 +215,9 @@ class Experiment(Node):
                                      target_robot=self.robots["target"].name,
                                      **{k: v for k, v in fields.items() if k != "latent_dim"})
                     transferred = self.transferred(model_id, experience)
-                    for guarded in (False, True) if self.guarded else (False,):
-                        learner = "/target/guarded_learner" if guarded else "/target/learner"
-                        name = f"{method.upper()}{'-guarded' if guarded else ''}/T{guided:g}"
+                    for variant in self.variants():
+                        learner = f"/target/{variant + '_' if variant else ''}learner"
+                        name = f"{method.upper()}{'-' + variant if variant else ''}/T{guided:g}"
                         self.record(curves, name, self.learn(
                             learner, after_transfer_seed, self.total_seconds - guided,
                             own=self.padded(own), transferred=transferred,
@@ -222,6 +225,11 @@ class Experiment(Node):
             self.seeds_done.append(seed)
             write_outputs(curves, self, self.output_dir)
         return curves
+
+    def variants(self):
+        """The target's learners of the transfer conditions: "" (the thesis'), "guarded",
+        "yielding"."""
+        return [""] + ["guarded"] * self.guarded + ["yielding"] * self.yielding
 
     def record(self, curves, name, run):
         times, errors, rates, n_transferred, _ = run
