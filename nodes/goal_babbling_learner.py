@@ -14,7 +14,6 @@ on reachable test points, on the analytic kinematics (the robot never moves for 
 
 Parameters, topics, services and the learner's clock: docs/nodes.md.
 """
-import json
 import math
 import os
 import threading
@@ -22,89 +21,30 @@ import threading
 import numpy as np
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from lpa_transfer.robots.kinematics import hold_at_home, robot_kinematics
 from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
 from lpa_transfer._validation import check_x_bounds
-from lpa_transfer.goal_babbling.negative_transfer import GuardedModel, chain_lipschitz
-from lpa_transfer.goal_babbling.transfer import initialise_with_transfer
-from lpa_transfer.goal_babbling.yielding import YieldingModel
-from lpa_transfer.goal_babbling.reaching import (evaluation_points, reaching_errors,
-                                                 reaching_rate)
+from lpa_transfer.goal_babbling.negative_transfer import chain_lipschitz
+from lpa_transfer.goal_babbling.transfer import (finite_experience, initialise_with_transfer,
+                                                 inverse_knn_model)
 from lpa_transfer.robots.environment import stepped_environment, task_dims
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer_interfaces.msg import ReachingEvaluation
 from lpa_transfer_interfaces.action import GoalBabble
 from lpa_transfer_interfaces.srv import InitialiseSensorimotor
-from lpa_transfer_nodes.calls import ServiceTimeout, call_service, wait_for_services
-from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
+from lpa_transfer_nodes.conversions import from_matrix, to_matrix
 from lpa_transfer_nodes.entry import serve
-from lpa_transfer_nodes.params import DOUBLES, INTEGERS, declare_table, describe_use_sim_time
-from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
+from lpa_transfer_nodes.goal_babbling_parameters import (EVALUATION, GOAL_BABBLING, LEARNING,
+                                                         ROBOT, guard_params)
+from lpa_transfer_nodes.markers import task_marker_publisher
+from lpa_transfer_nodes.params import declare_table, describe_use_sim_time
+from lpa_transfer_nodes.reaching_evaluation import EVALUATION_QOS, ReachingEvaluator
+from lpa_transfer_nodes.robot_clients import RobotCalls, RobotClients, Stopped, robot_stepper
 from lpa_transfer_nodes.servers import JobCancelled, answering, long_job, unless_busy
-from lpa_transfer_nodes.markers import (MISSED, REACHED, marker_array, sphere_list,
-                                        task_marker_publisher)
-
-#: Every evaluation should reach its subscribers, even many in one babble call.
-EVALUATION_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-GUARD_KEYS = ("transferred_weight", "coverage_radius", "coverage_count",
-              "disagreement_threshold", "lipschitz", "n_checked")
-ROBOT = (
-    ("robot", "", "the robot parameter file (joint limits and analytic kinematics); required"),
-    ("home", DOUBLES, "q_home (rad), where babbling starts and returns to; unset: zero clipped "
-     "into the joint limits", dict(additional_constraints="one value per joint")),
-    ("active_joints", INTEGERS, "babble with these joints only, the others held at home; "
-     "unset: all", dict(additional_constraints="distinct joint indices")),
-    *((f"x_{end}", DOUBLES, f"X_bounds' {end} corner: the task box goals are drawn from (m); "
-       "required", dict(additional_constraints="one value per task coordinate"))
-      for end in ("low", "high")))
-#: GoalBabbling's hyperparameters.
-GOAL_BABBLING = (
-    ("n_subtargets", 10, "GoalBabbling's T, sub-targets per goal", dict(range=(1, None))),
-    ("sigma", 0.1, "GoalBabbling's exploration noise", dict(range=(0.0, None), finite=True)),
-    ("drift", 0.01, "drift of the exploration noise", dict(range=(0.0, None), finite=True)),
-    ("p_home", 0.1, "probability of returning home", dict(range=(0.0, 1.0))),
-    ("steps_per_second", 10.0, "babbling steps a simulated second (the learner's clock)",
-     dict(positive=True, finite=True)),
-    ("seed", 0, "GoalBabbling's seed (unless an initialise with reset gives one)",
-     dict(range=(0, None))))
-LEARNING = GOAL_BABBLING + (
-    ("steps_per_sample", 100, "physics steps per babbling step", dict(range=(1, None))),
-    ("physics_step", 0.001, "the simulator's physics step (s)",
-     dict(positive=True, finite=True)),
-    ("n_neighbors", 3, "K of the K-nearest-neighbour inverse model", dict(range=(1, None))),
-    ("guard", False, "take transferred samples into a GuardedModel (lower weight, retired once "
-     "covered or contradicted by own data) instead of learning them like own data"),
-    ("guard_params", "{}", "JSON object of GuardedModel's hyperparameters; lipschitz defaults "
-     "to the robot's chain_lipschitz; ignored when guard is false",
-     dict(additional_constraints="keys from " + ", ".join(GUARD_KEYS))),
-    ("yielding", False, "take transferred samples into a YieldingModel: the own samples alone "
-     "answer within reaching_threshold of a query and steer exploration (not with guard)"))
-EVALUATION = (
-    *((f"eval_{end}", DOUBLES, f"the {end} corner of the test points' box (m); unset: "
-       f"X_bounds' {end} corner") for end in ("low", "high")),
-    ("eval_spacing", 0.05, "the test points' grid spacing (m)",
-     dict(positive=True, finite=True)),
-    ("eval_joint_samples", 20000, "the joint samples that find the reachable grid points "
-     "(once, at start-up)", dict(range=(1, None))),
-    ("reaching_threshold", 0.01, "a test point counts as reached within this distance (m)",
-     dict(range=(0.0, None), finite=True)),
-    ("call_timeout", 30.0, "s for each robot call", dict(range=(0.0, None), finite=True)),
-    ("wait_timeout", 30.0, "s to wait for the robot's services",
-     dict(range=(0.0, None), finite=True)),
-    ("step_service", "robot_sim/step", "the robot's StepRobot service, resolved in the node's "
-     "namespace"),
-    ("reset_service", "robot_sim/reset", "the robot's ResetRobot service, resolved in the "
-     "node's namespace"))
 
 
-class Stopped(ValueError):
-    """SIGINT/SIGTERM arrived during a call (answered as a failed request)."""
-
-
-class GoalBabblingLearner(Node):
+class GoalBabblingLearner(ReachingEvaluator, RobotCalls, Node):
     def __init__(self, stop):
         super().__init__("goal_babbling_learner")
         self.stop = stop
@@ -140,19 +80,6 @@ class GoalBabblingLearner(Node):
         self.start_afresh()
         self.serve()
 
-    def test_points(self, p):
-        """The reachable points of the test grid over the evaluation box (§6.5)."""
-        eval_bounds = tuple(p[f"eval_{end}"] or bound
-                            for end, bound in zip(("low", "high"), self.x_bounds))
-        points = evaluation_points(self.kinematics, check_x_bounds(eval_bounds, self.n_task),
-                                   spacing=p["eval_spacing"],
-                                   n_joint_samples=p["eval_joint_samples"])
-        if not len(points):
-            raise ValueError(f"no test points: no point of the grid of {p['eval_spacing']:g} m "
-                             f"over the box {np.round(eval_bounds, 6).tolist()} is reachable "
-                             f"(check eval_low/eval_high, x_low/x_high and eval_spacing)")
-        return points
-
     def serve(self):
         """Publish the evaluations and offer ~/initialise and the ~/babble action."""
         self.marker_pub = task_marker_publisher(self)
@@ -173,15 +100,7 @@ class GoalBabblingLearner(Node):
     # -- configuration -------------------------------------------------------------------------
     def guard_spec(self, guard, text):
         """GuardedModel's hyperparameters when ``guard`` is set (None otherwise)."""
-        try:
-            params = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"guard_params must be a JSON object: {exc}") from None
-        if not isinstance(params, dict):
-            raise ValueError(f"guard_params must be a JSON object, got {text!r}")
-        unknown = sorted(set(params) - set(GUARD_KEYS))
-        if unknown:
-            raise ValueError(f"guard_params: unknown {unknown}; known: {list(GUARD_KEYS)}")
+        params = guard_params(text)
         if not guard:
             if params:
                 self.get_logger().warning("guard_params are ignored: guard is false")
@@ -210,12 +129,7 @@ class GoalBabblingLearner(Node):
 
     def fresh_model(self):
         """A sensorimotor model knowing nothing yet (inverse K-NN; guarded, yielding or plain)."""
-        model = make_sensorimotor_model("knn", forward=False, n_neighbors=self.n_neighbors)
-        if self.yielding and self.guard is not None:
-            raise ValueError("guard and yielding exclude each other: set one of them")
-        if self.yielding:
-            return YieldingModel(model, gate_radius=self.threshold)
-        return model if self.guard is None else GuardedModel(model, **self.guard)
+        return inverse_knn_model(self.n_neighbors, self.guard, self.yielding, self.threshold)
 
     def start_afresh(self, seed=-1):
         """A new model, the clock at 0, babbling (with ``seed``; -1: the seed parameter) to be
@@ -224,35 +138,6 @@ class GoalBabblingLearner(Node):
         self.model, self.babbling = self.fresh_model(), None
         self.clock_offset = 0.0   # learner's clock = clock_offset + babbling time
         self.n_transferred = 0    # transferred samples learned like own data (unguarded)
-
-    # -- robot -----------------------------------------------------------------------------------
-    def call(self, client, request, **options):
-        try:
-            return call_service(self.robot_clients.executor, client, request, self.call_timeout,
-                                self.stop, **options)
-        except ServiceTimeout:
-            if self.stop.is_set():
-                raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot's "
-                              "answer") from None
-            raise
-
-    def on_sample(self, command, state):
-        self.sim_time = state.time
-
-    def wait_for_robot(self):
-        try:
-            wait_for_services([self.robot_clients.step, self.robot_clients.reset],
-                              self.wait_timeout, self.stop)
-        except ServiceTimeout:
-            if not self.stop.is_set():
-                raise
-        if self.stop.is_set():
-            raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot")
-
-    def reset_robot(self):
-        """Put the robot at rest at q_home."""
-        reset = robot_resetter(self.call, self.robot_clients.reset, self.robot.name)
-        self.sim_time = reset(self.kinematics.home).time
 
     # -- services --------------------------------------------------------------------------------
     @property
@@ -263,15 +148,8 @@ class GoalBabblingLearner(Node):
     def rows(self, matrix, name):
         """(finite rows (N, d + m), number of rejected rows) of a Matrix; ValueError for a
         wrong number of columns (a matrix without rows may have any)."""
-        values = from_matrix(matrix, name)
-        width = self.robot.n_joints + self.n_task
-        if not len(values):
-            return values.reshape(0, width), 0
-        if values.shape[1] != width:
-            raise ValueError(f"{name} needs {self.robot.n_joints} joint + {self.n_task} task = "
-                             f"{width} columns (q, x), got {values.shape[1]}")
-        finite = np.isfinite(values).all(axis=1)
-        return values[finite], int(np.count_nonzero(~finite))
+        return finite_experience(from_matrix(matrix, name), self.robot.n_joints, self.n_task,
+                                 name)
 
     def initialise(self, request, response):
         own, rejected_own = self.rows(request.own, "own")
@@ -353,47 +231,6 @@ class GoalBabblingLearner(Node):
         result.sim_time = self.sim_time
         return (f"babbled {n_steps} steps to t = {self.clock:g} s; "
                 + self.describe(evaluations[-1]))
-
-    # -- evaluation ----------------------------------------------------------------------------
-    def counts(self):
-        """(own samples, active transferred samples) in the inverse model."""
-        if isinstance(self.model, (GuardedModel, YieldingModel)):
-            own = getattr(self.model.model.inverse, "n_samples_", 0)
-            return own, self.model.n_active_
-        total = getattr(self.model.inverse, "n_samples_", 0)
-        return total - self.n_transferred, self.n_transferred
-
-    def evaluate(self):
-        """Evaluate L⁻¹ on the test points (analytic kinematics) and publish the result."""
-        n_own, n_transferred = self.counts()
-        if n_own + n_transferred:
-            errors = reaching_errors(self.model.inverse, self.kinematics, self.points)
-            mean_error, rate = float(errors.mean()), reaching_rate(errors, self.threshold)
-        else:   # nothing learned yet: no command to evaluate
-            errors, mean_error, rate = np.full(len(self.points), np.inf), math.nan, 0.0
-        msg = ReachingEvaluation(
-            robot=self.robot.name, learning_time=float(self.clock), mean_error=float(mean_error),
-            reaching_rate=float(rate), reaching_threshold=self.threshold,
-            n_test_points=len(self.points), n_own_samples=int(n_own),
-            n_transferred_samples=int(n_transferred))
-        msg.header.stamp, msg.header.frame_id = sim_stamp(self.sim_time), "world"
-        self.evaluation_pub.publish(msg)
-        # the test points on task_markers: green reached within the threshold, red not
-        # (task coordinates are the first of world x, y, z: a planar chain's z is 0)
-        points = np.zeros((len(self.points), 3))
-        points[:, :self.n_task] = self.points
-        colours = np.where((errors <= self.threshold)[:, None], REACHED, MISSED)
-        self.marker_pub.publish(marker_array(sphere_list(
-            f"{self.get_name()}/test_points", 0, points, colours, msg.header.stamp,
-            diameter=0.4 * self.eval_spacing)))
-        self.get_logger().info(f"t = {self.clock:g} s: " + self.describe(msg))
-        return msg
-
-    @staticmethod
-    def describe(evaluation):
-        return (f"mean reaching error {1e3 * evaluation.mean_error:.1f} mm, reaching rate "
-                f"{100 * evaluation.reaching_rate:.1f} % ({evaluation.n_own_samples} own, "
-                f"{evaluation.n_transferred_samples} transferred samples)")
 
     def destroy_node(self):
         self.robot_clients.destroy()

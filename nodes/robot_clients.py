@@ -1,9 +1,11 @@
 """A robot_sim's StepRobot and ResetRobot services as ``step`` and ``reset`` functions, the
-simulated robot interface of the library's learners and explorers.
+simulated robot interface of the library's learners and explorers; :class:`RobotCalls`, a
+node's blocking calls to them that SIGINT/SIGTERM stops.
 """
 import rclpy
 
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
+from lpa_transfer_nodes.calls import ServiceTimeout, call_service, wait_for_services
 from lpa_transfer_nodes.conversions import sim_state
 from lpa_transfer_nodes.entry import FastExecutor
 
@@ -57,3 +59,41 @@ class RobotClients:
     def destroy(self):
         self.executor.shutdown()
         self.node.destroy_node()
+
+
+class Stopped(ValueError):
+    """SIGINT/SIGTERM arrived during a call (answered as a failed request)."""
+
+
+class RobotCalls:
+    """A node's calls to its robot's ``robot_clients`` (:class:`RobotClients`) within
+    ``call_timeout`` and ``wait_timeout`` s, stopped by the event ``stop``; mixed into a node
+    with ``robot`` (its name) and ``kinematics`` (its home); the robot's time in ``sim_time``."""
+
+    def call(self, client, request, **options):
+        try:
+            return call_service(self.robot_clients.executor, client, request, self.call_timeout,
+                                self.stop, **options)
+        except ServiceTimeout:
+            if self.stop.is_set():
+                raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot's "
+                              "answer") from None
+            raise
+
+    def on_sample(self, command, state):
+        self.sim_time = state.time
+
+    def wait_for_robot(self):
+        try:
+            wait_for_services([self.robot_clients.step, self.robot_clients.reset],
+                              self.wait_timeout, self.stop)
+        except ServiceTimeout:
+            if not self.stop.is_set():
+                raise
+        if self.stop.is_set():
+            raise Stopped("stopped (SIGINT/SIGTERM) while waiting for the robot")
+
+    def reset_robot(self):
+        """Put the robot at rest at q_home."""
+        reset = robot_resetter(self.call, self.robot_clients.reset, self.robot.name)
+        self.sim_time = reset(self.kinematics.home).time

@@ -14,6 +14,9 @@ weight and retires them; :mod:`lpa_transfer.goal_babbling.experiment` runs exper
 import numpy as np
 
 from lpa_transfer import _validation as check
+from lpa_transfer.goal_babbling.negative_transfer import GuardedModel
+from lpa_transfer.goal_babbling.yielding import YieldingModel
+from lpa_transfer.learners.sensorimotor import make_sensorimotor_model
 from lpa_transfer.robots.kinematics import check_joints, pad_transferred
 
 
@@ -52,3 +55,29 @@ def initialise_with_transfer(model, commands, points):
         return model.transfer(commands, points)
     return model.update(commands, points)
 
+
+
+def inverse_knn_model(n_neighbors, guard=None, yielding=False, gate_radius=0.01):
+    """A target's inverse K-NN model knowing nothing yet: a :class:`GuardedModel` with the
+    hyperparameters ``guard`` (a dict; None: no guard), a
+    :class:`~lpa_transfer.goal_babbling.yielding.YieldingModel` gating at ``gate_radius`` (m)
+    when ``yielding``, or a plain SensorimotorModel."""
+    model = make_sensorimotor_model("knn", forward=False, n_neighbors=n_neighbors)
+    if yielding and guard is not None:
+        raise ValueError("guard and yielding exclude each other: set one of them")
+    if yielding:
+        return YieldingModel(model, gate_radius=gate_radius)
+    return model if guard is None else GuardedModel(model, **guard)
+
+
+def finite_experience(values, n_joints, n_task, name):
+    """(finite rows (N, n_joints + n_task), number of rejected rows) of experience rows (q, x);
+    ValueError for a wrong number of columns (a matrix without rows may have any)."""
+    width = n_joints + n_task
+    if not len(values):
+        return values.reshape(0, width), 0
+    if values.shape[1] != width:
+        raise ValueError(f"{name} needs {n_joints} joint + {n_task} task = "
+                         f"{width} columns (q, x), got {values.shape[1]}")
+    finite = np.isfinite(values).all(axis=1)
+    return values[finite], int(np.count_nonzero(~finite))
