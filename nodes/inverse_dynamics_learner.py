@@ -26,22 +26,23 @@ import threading
 import numpy as np
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 
 from lpa_transfer.robots.kinematics import robot_kinematics
 from lpa_transfer.robots.control import PID
 from lpa_transfer.robots.kinematics import home_pose
 from lpa_transfer.inverse_dynamics.online_learning import (FeedForwardLearner, input_scale,
-                                                           make_regressor, regressors)
+                                                           make_regressor)
 from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS, star_task
+from lpa_transfer.inverse_dynamics.tasks import star_task
 from lpa_transfer_interfaces.msg import TrialResult
 from lpa_transfer_interfaces.action import RunTrials
 from lpa_transfer_interfaces.srv import InitialiseLearner
 from lpa_transfer_nodes.calls import call_service, wait_for_services
 from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
 from lpa_transfer_nodes.entry import serve
-from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.inverse_dynamics_parameters import (FEEDBACK, REGRESSOR, ROBOT,
+                                                             SERVICES, TASK, TIMING, YIELDING)
+from lpa_transfer_nodes.params import declare_table, describe_use_sim_time
 from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
 from lpa_transfer_nodes.servers import JobCancelled, answering, long_job, unless_busy
 from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_array,
@@ -51,50 +52,26 @@ from lpa_transfer_nodes.markers import (ACTUAL, DESIRED, line_strip, marker_arra
 class InverseDynamicsLearner(Node):
     def __init__(self, stop):
         super().__init__("inverse_dynamics_learner")
-        d = lambda *args, **kwargs: declare(self, *args, **kwargs)  # noqa: E731
-        doubles = lambda name, text: declare_array(  # noqa: E731
-            self, name, Parameter.Type.DOUBLE_ARRAY, text)
         self.stop = stop
         describe_use_sim_time(self)
-        self.robot = load_robot_params(os.path.expanduser(
-            d("robot", "", "the robot parameter file (scenarios/robots/*.toml; required)")))
-        control_rate = float(d("control_rate", 100.0, "control periods a second (Hz), up to "
-                               "1 / physics_step", positive=True, finite=True))
-        physics_step = float(d("physics_step", 0.001, "the simulator's physics step (s): each "
-                               "period advances round(1 / (control_rate * physics_step)) steps",
-                               positive=True, finite=True))
+        self.robot = load_robot_params(os.path.expanduser(declare_table(self, ROBOT)["robot"]))
+        timing = declare_table(self, TIMING)
+        control_rate, physics_step = (float(timing["control_rate"]),
+                                      float(timing["physics_step"]))
         if not 0 < control_rate <= 1.0 / physics_step:
             raise ValueError(f"the parameter control_rate must be in (0, {1 / physics_step:g}] "
                              f"Hz (1 / physics_step), got {control_rate}")
         self.dt = 1.0 / control_rate
         self.n_steps = max(1, round(self.dt / physics_step))
-        pid = PID.from_gains(doubles("pid", "[kp, ki, kd] of the feedback PID (required; "
-                                     "thesis: Pincher [5, 0.01, 0.1], youBot [100, 0.01, 2.0])"))
-        self.trajectory = self.task(d, doubles)
-        self.regressor_spec = (
-            d("regressor", "lwpr", "the online learner of the feed-forward torque",
-              choices=sorted(regressors())),
-            json.loads(d("regressor_params", "{}", "JSON object of the regressor's "
-                         "hyperparameters, e.g. {\"init_D\": 30}; LWPR's norm_in defaults to "
-                         "the spread of the task's desired states")))
+        pid = PID.from_gains(declare_table(self, FEEDBACK)["pid"])
+        self.trajectory = self.task(declare_table(self, TASK))
+        regressor = declare_table(self, REGRESSOR)
+        self.regressor_spec = (regressor["regressor"], json.loads(regressor["regressor_params"]))
         if self.regressor_spec[0] == "lwpr":
             self.regressor_spec[1].setdefault("norm_in", input_scale(*self.trajectory[:3]))
-        self.own_w_gen = float(d("own_w_gen", 0.3, "after a yielding initialisation "
-                                 "(InitialiseLearner yielding): the robot's own samples make "
-                                 "a receptive field of their own unless one answers them above "
-                                 "this (LWPR's w_gen for them)", range=(0.0, 1.0), finite=True))
+        self.own_w_gen = float(declare_table(self, YIELDING)["own_w_gen"])
         self.learner = self.fresh_learner(pid)
-        self.call_timeout = float(d("call_timeout", 30.0, "seconds for each robot call (step "
-                                    "or reset)", positive=True))
-        self.wait_timeout = float(d("wait_timeout", 30.0, "seconds to wait for the robot's "
-                                    "services", positive=True))
-        self.robot_clients = RobotClients(
-            self, d("step_service", "robot_sim/step", "the robot's StepRobot service (relative: "
-                    "in the node's namespace)"),
-            d("reset_service", "robot_sim/reset", "the robot's ResetRobot service"))
-        self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
-        self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
-                                             self.robot.name)
+        self.connect_robot(declare_table(self, SERVICES))
         self.trial = 0
         self.result_pub = self.create_publisher(TrialResult, "trial_result", 10)
         self.marker_pub = task_marker_publisher(self)
@@ -110,23 +87,21 @@ class InverseDynamicsLearner(Node):
             f"{control_rate:g} Hz ({self.n_steps} physics steps each), "
             f"regressor {self.regressor_spec[0]}")
 
-    def task(self, d, doubles):
+    def connect_robot(self, p):
+        """The robot's StepRobot and ResetRobot clients, as ``step`` and ``reset_robot_to``."""
+        self.call_timeout, self.wait_timeout = float(p["call_timeout"]), float(p["wait_timeout"])
+        self.robot_clients = RobotClients(self, p["step_service"], p["reset_service"])
+        self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
+        self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
+                                             self.robot.name)
+
+    def task(self, p):
         """The star's desired (q, q̇, q̈, x) around the end effector of ``centre_pose``."""
-        kinematics = robot_kinematics(self.robot, doubles(
-            "centre_pose", "joint angles (rad) whose end-effector position is the star's centre; "
-            "every trial starts there; unset: zero clipped into the joint limits") or None)
+        kinematics = robot_kinematics(self.robot, p["centre_pose"] or None)
         self.centre_pose = kinematics.home
-        return star_task(
-            kinematics, d("star_radius", 0.05, "the star's radius (m)", positive=True,
-                          finite=True), self.dt,
-            doubles("star_u", "first axis of the star's plane (world); unset: x"),
-            doubles("star_v", "second axis of the star's plane (world); unset: y"),
-            d("star_spread", 2 * np.pi, "the angle the star's lines spread over (rad)",
-              positive=True, finite=True),
-            d("star_start_angle", 0.0, "the angle of the first line (rad)", finite=True),
-            time_law=d("star_time_law", "minimum_jerk", "each 0.6 s leg's time law: "
-                       "minimum_jerk (from rest to rest) or linear (constant speed)",
-                       choices=list(TIME_LAWS)))
+        return star_task(kinematics, p["star_radius"], self.dt, p["star_u"], p["star_v"],
+                         p["star_spread"], p["star_start_angle"],
+                         time_law=p["star_time_law"])
 
     def publish_markers(self, stamp, actual=None):
         """The star's desired end-effector path and, after a trial, the path it tracked, on

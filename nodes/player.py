@@ -25,14 +25,13 @@ import time
 from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rosgraph_msgs.msg import Clock
 import yaml
 
 from lpa_transfer.recording.bag import read_messages, summary
 from lpa_transfer_nodes.conversions import message_class, sim_stamp
 from lpa_transfer_nodes.entry import run_job
-from lpa_transfer_nodes.params import declare, declare_array, describe_use_sim_time
+from lpa_transfer_nodes.params import STRINGS, declare_table, describe_use_sim_time
 from lpa_transfer_nodes.qos import CLOCK_QOS, qos_from_offered
 
 
@@ -47,45 +46,37 @@ def bag_topics(path):
                          f"{type(exc).__name__}: {exc}") from None
 
 
+INPUT = (("input", "", "path of the .mcap bag to play (required)"),)
+PLAYBACK = (
+    ("rate", 1.0, "playback speed: 1 as recorded, 2 twice as fast; 0 as fast as possible",
+     dict(range=(0.0, None), finite=True)),
+    ("loop", False, "play the bag again and again until stopped"),
+    ("start_delay", 1.0, "seconds to wait before playing", dict(range=(0.0, None), finite=True)),
+    ("wait_for_subscribers", 1, "subscribers each played topic waits for (up to wait_timeout) "
+     "before playing; 0: do not wait", dict(range=(0, None))),
+    ("wait_timeout", 10.0, "seconds to wait for subscribers, and for reliable subscribers to "
+     "acknowledge at the end", dict(range=(0.0, None), finite=True)),
+    ("clock", 0.0, "publish the playback time on /clock at this rate (Hz), like ros2 bag play "
+     "--clock; 0: no /clock", dict(range=(0.0, None), finite=True)),
+    ("qos_depth", 1000, "queue depth of each publisher", dict(positive=True)))
+TOPICS = (("topics", STRINGS, "topics to play; unset: every topic of the bag"),)
+
+
 class Player(Node):
     """One publisher per played topic; ``play()`` publishes the bag's messages in log time order."""
 
     def __init__(self, stop):
         super().__init__("player")
         self.stop = stop
-        self.input = declare(self, "input", "", "path of the .mcap bag to play (required)")
+        self.input = declare_table(self, INPUT)["input"]
         if not self.input:
             raise ValueError("parameter 'input' (path of the .mcap file) is required")
-        self.rate = declare(self, "rate", 1.0, "playback speed: 1 as recorded, 2 twice as "
-                            "fast; 0 as fast as possible", range=(0.0, None), finite=True)
-        self.loop = declare(self, "loop", False, "play the bag again and again until stopped")
-        self.start_delay = declare(self, "start_delay", 1.0, "seconds to wait before playing",
-                                   range=(0.0, None), finite=True)
-        self.min_subscribers = declare(self, "wait_for_subscribers", 1,
-                                       "subscribers each played topic waits for (up to "
-                                       "wait_timeout) before playing; 0: do not wait",
-                                       range=(0, None))
-        self.wait_timeout = declare(self, "wait_timeout", 10.0,
-                                    "seconds to wait for subscribers, and for reliable "
-                                    "subscribers to acknowledge at the end",
-                                    range=(0.0, None), finite=True)
-        self.clock_rate = declare(self, "clock", 0.0,
-                                  "publish the playback time on /clock at this rate (Hz), "
-                                  "like ros2 bag play --clock; 0: no /clock",
-                                  range=(0.0, None), finite=True)
-        depth = declare(self, "qos_depth", 1000, "queue depth of each publisher", positive=True)
+        p = declare_table(self, PLAYBACK)
+        self.rate, self.loop, self.start_delay = p["rate"], p["loop"], p["start_delay"]
+        self.min_subscribers, self.wait_timeout = p["wait_for_subscribers"], p["wait_timeout"]
+        self.clock_rate, depth = p["clock"], p["qos_depth"]
         describe_use_sim_time(self)
-        wanted = declare_array(self, "topics", Parameter.Type.STRING_ARRAY,
-                               "topics to play; unset: every topic of the bag")
-        topics = bag_topics(self.input)
-        absent = [topic for topic in wanted if topic not in topics]
-        if wanted and len(absent) == len(set(wanted)):
-            raise ValueError(f"none of the requested topics {wanted} is in {self.input} "
-                             f"(it holds {sorted(topics)})")
-        if absent:
-            self.get_logger().warning(f"not in {self.input}, so not played: {absent}")
-        self.topic_info = {topic: info for topic, info in topics.items()
-                           if not wanted or topic in wanted}
+        self.topic_info = self.played_topics(declare_table(self, TOPICS)["topics"])
         self.publishers_by_topic = {
             topic: self.create_publisher(
                 message_class(info.type_name), topic,
@@ -98,6 +89,18 @@ class Player(Node):
                           if self.clock_rate > 0 else None)
         self.playback = None   # (wall start, log-time start) of the pass being played
         self.finished = threading.Event()   # set when the last pass ends: the clock stops
+
+    def played_topics(self, wanted):
+        """The bag's topics to play (``wanted``; empty: all), with a warning for those it lacks
+        and ValueError if it holds none of them."""
+        topics = bag_topics(self.input)
+        absent = [topic for topic in wanted if topic not in topics]
+        if wanted and len(absent) == len(set(wanted)):
+            raise ValueError(f"none of the requested topics {wanted} is in {self.input} "
+                             f"(it holds {sorted(topics)})")
+        if absent:
+            self.get_logger().warning(f"not in {self.input}, so not played: {absent}")
+        return {topic: info for topic, info in topics.items() if not wanted or topic in wanted}
 
     def publish_clock(self):
         """Publish the bag time at the playback position every 1/clock s until stopped."""

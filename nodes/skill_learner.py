@@ -30,44 +30,49 @@ from lpa_transfer_interfaces.srv import LearnSkill
 from lpa_transfer_nodes.calls import call_service, wait_for_services
 from lpa_transfer_nodes.conversions import from_matrix, sim_stamp, to_matrix
 from lpa_transfer_nodes.entry import serve
-from lpa_transfer_nodes.params import declare, describe_use_sim_time
+from lpa_transfer_nodes.params import declare_table, describe_use_sim_time
 from lpa_transfer_nodes.robot_clients import RobotClients, robot_resetter, robot_stepper
 from lpa_transfer_nodes.servers import answering
 from lpa_transfer_nodes.markers import ACTUAL, line_strip, marker_array, task_marker_publisher
+
+
+ROBOT = (
+    ("robot", "", "the robot parameter file; required"),
+    ("n_joints", 4, "the DMP drives the robot's first n joints; the others are held at the "
+     "robot's home (zero clipped into the limits)", dict(range=(1, None))))
+EXECUTION = (
+    ("dmp_weights_per_joint", 30, "the DMP's N, basis functions per joint",
+     dict(range=(2, None))),
+    ("dmp_alpha_z", 25.0, "the DMP's alpha_z (beta_z = alpha_z / 4)",
+     dict(positive=True, finite=True)),
+    ("physics_step", 0.001, "the simulator's physics step (s): sample k is commanded for "
+     "round((t_k - t_k-1) / physics_step) + settle_steps physics steps",
+     dict(positive=True, finite=True)),
+    ("settle_steps", 0, "extra physics steps after each command before the end effector is "
+     "read", dict(range=(0, None))),
+    ("call_timeout", 30.0, "s for each robot call", dict(range=(0.0, None))),
+    ("wait_timeout", 30.0, "s to wait for the robot's services", dict(range=(0.0, None))),
+    ("step_service", "robot_sim/step", "the robot's StepRobot service, resolved in the node's "
+     "namespace"),
+    ("reset_service", "robot_sim/reset", "the robot's ResetRobot service, resolved in the "
+     "node's namespace"))
 
 
 class SkillLearner(Node):
     def __init__(self, stop):
         super().__init__("skill_learner")
         self.stop = stop
-        self.robot = load_robot_params(os.path.expanduser(declare(
-            self, "robot", "", "the robot parameter file; required")))
-        self.n_joints = declare(self, "n_joints", 4, "the DMP drives the robot's first n "
-                                "joints; the others are held at the robot's home (zero "
-                                "clipped into the limits)", range=(1, None))
+        p = declare_table(self, ROBOT)
+        self.robot = load_robot_params(os.path.expanduser(p["robot"]))
+        self.n_joints = p["n_joints"]
         self.kinematics = arm_kinematics(self.robot, self.n_joints, name=self.robot.name)
         self.home = home_pose(self.robot.joint_limits)
-        self.dmp = JointDMP(
-            n_weights_per_dim=declare(self, "dmp_weights_per_joint", 30, "the DMP's N, basis "
-                                      "functions per joint", range=(2, None)),
-            alpha_z=declare(self, "dmp_alpha_z", 25.0, "the DMP's alpha_z (beta_z = "
-                            "alpha_z / 4)", positive=True, finite=True))
-        self.physics_step = declare(self, "physics_step", 0.001, "the simulator's physics step "
-                                    "(s): sample k is commanded for round((t_k - t_k-1) / "
-                                    "physics_step) + settle_steps physics steps",
-                                    positive=True, finite=True)
-        self.settle_steps = declare(self, "settle_steps", 0, "extra physics steps after each "
-                                    "command before the end effector is read",
-                                    range=(0, None))
-        self.call_timeout = declare(self, "call_timeout", 30.0, "s for each robot call",
-                                    range=(0.0, None))
-        self.wait_timeout = declare(self, "wait_timeout", 30.0, "s to wait for the robot's "
-                                    "services", range=(0.0, None))
-        self.robot_clients = RobotClients(
-            self, declare(self, "step_service", "robot_sim/step", "the robot's StepRobot "
-                          "service, resolved in the node's namespace"),
-            declare(self, "reset_service", "robot_sim/reset", "the robot's ResetRobot "
-                    "service, resolved in the node's namespace"))
+        p = declare_table(self, EXECUTION)
+        self.dmp = JointDMP(n_weights_per_dim=p["dmp_weights_per_joint"],
+                            alpha_z=p["dmp_alpha_z"])
+        self.physics_step, self.settle_steps = p["physics_step"], p["settle_steps"]
+        self.call_timeout, self.wait_timeout = p["call_timeout"], p["wait_timeout"]
+        self.robot_clients = RobotClients(self, p["step_service"], p["reset_service"])
         describe_use_sim_time(self)
         self.step = robot_stepper(self.call, self.robot_clients.step, self.robot.name)
         self.reset_robot_to = robot_resetter(self.call, self.robot_clients.reset,
