@@ -47,6 +47,7 @@ from lpa_transfer_nodes.servers import answering
 from lpa_transfer.exploration.correspondences import read_correspondences
 from lpa_transfer.transfer.fit_spec import FitSpec, limited
 from lpa_transfer.transfer.model_store import METADATA, ModelStore, transfer_in_blocks
+from lpa_transfer.transfer.requests import check_batch, check_transfer, file_inside
 from lpa_transfer_interfaces.msg import CorrespondenceBatch, CorrespondenceSample, Matrix
 from lpa_transfer_interfaces.srv import (DeleteModel, DescribeModel, FitModel, ListModels,
                                          TransferPoints)
@@ -70,7 +71,10 @@ LIMITS = tuple(row + (dict(range=(1, None)),) for row in (
                         "refused, k_max = 0 means this many"),
     ("transfer_block_elements", 20_000_000, "a transfer through an LPA model runs in blocks "
                                             "of rows of about this many points x clusters, "
-                                            "so that its work memory stays bounded")))
+                                            "so that its work memory stays bounded"),
+    ("max_transfer_mib", 1024, "most memory one transfer may take, in MiB: its answer (points "
+     "x target dimensions x 8 bytes) and its work arrays; a larger one is refused before "
+     "anything is allocated")))
 
 
 class MappingService(Node):
@@ -116,6 +120,8 @@ class MappingService(Node):
 
     def on_batch(self, msg):
         try:
+            check_batch((msg.source.rows, msg.source.cols), (msg.target.rows, msg.target.cols),
+                        self.limits["max_fit_points"])
             rows = zip(from_matrix(msg.source, "source"), from_matrix(msg.target, "target"))
         except ValueError as exc:
             self.get_logger().warning(f"ignoring a correspondence batch: {exc}")
@@ -142,16 +148,6 @@ class MappingService(Node):
         source, target = (np.array([sample[side] for sample in samples]) for side in (0, 1))
         return source, target, dict(source_robot=robots[0], target_robot=robots[1])
 
-    def correspondence_path(self, name):
-        """The file ``name`` names inside ``data_dir`` (a relative name is taken in it); one
-        that resolves outside it (an absolute path, ``..``, a symbolic link) is a ValueError."""
-        path = (self.data_dir / name).resolve()
-        if not path.is_relative_to(self.data_dir):
-            raise ValueError(f"correspondence_file {name!r} is outside the data directory "
-                             f"{self.data_dir} (the parameter data_dir): only files in it are "
-                             f"read; give a path relative to it")
-        return path
-
     def correspondences(self, request):
         """The request's correspondences, its matrices, else its file (read_correspondences),
         else a received pair, as ``(source, target, metadata)``: what the file or the pair
@@ -160,7 +156,7 @@ class MappingService(Node):
             return (from_matrix(request.source, "source"), from_matrix(request.target, "target"),
                     dict(correspondences="request"))
         if request.correspondence_file:
-            path = self.correspondence_path(request.correspondence_file)
+            path = file_inside(self.data_dir, request.correspondence_file)
             pairs = read_correspondences(path)
             said = dict(zip(("source_robot", "target_robot", "source_features",
                              "target_features"),
@@ -205,7 +201,8 @@ class MappingService(Node):
         holds about one copy of each side at a time, bench/bench_mapping_limits.py)."""
         source = from_matrix(request.source, "source")
         model = self.store.get(request.model_id)
-        shape = (len(source), int(model.n_features_out_))
+        shape = check_transfer(model, source.shape, self.limits["transfer_block_elements"],
+                               self.limits["max_transfer_mib"])
         data = array.array("d", [0.0]) * (shape[0] * shape[1])
         target = np.frombuffer(data, dtype=np.float64).reshape(shape)
         transfer_in_blocks(model, source, self.limits["transfer_block_elements"], out=target)
