@@ -29,8 +29,6 @@ serving.
 Parameters, topics and services: docs/nodes.md.
 """
 import math
-import os
-from pathlib import Path
 
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -39,8 +37,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, String
 from tf2_msgs.msg import TFMessage
 
-from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.simulator import ACTUATORS, CONTROL_MODES, RobotSimulator, robot_urdf
+from lpa_transfer.robots.simulator import (ACTUATORS, CONTROL_MODES, RobotSimulator,
+                                          simulated_description)
 from lpa_transfer_interfaces.srv import ResetRobot, StepRobot
 from lpa_transfer_nodes.conversions import WORLD_FRAME, sim_stamp
 from lpa_transfer_nodes.entry import FastExecutor, serve
@@ -56,6 +54,10 @@ def parameters(namespace):
         ("robot", "", "robot parameter file (scenarios/robots/*.toml) or a URDF file (*.urdf: "
          "its serial chain from the root link); set exactly one of robot and urdf"),
         ("urdf", "", "a URDF file simulated as it is, instead of robot"),
+        ("tip_link", "", "the chain's last link: robot:=*.urdf reads the chain down to it, "
+         "urdf:= takes its frame as the end effector; empty: the only leaf (robot), the "
+         "last link (urdf)"),
+        ("base_link", "", "robot:=*.urdf only: the chain's first link; empty: the root link"),
         ("control_mode", "position", "position: commands are joint targets (rad); torque: "
          "commands are joint torques (N m)", dict(choices=CONTROL_MODES)),
         ("physics_step", 1e-3, "the pybullet time step (s)", dict(positive=True, finite=True)),
@@ -93,18 +95,14 @@ class RobotSim(Node):
         self.lockstep, self.frame_prefix = p["lockstep"], p["frame_prefix"]
         describe_use_sim_time(self)
         robot, urdf = p["robot"], p["urdf"]
-        if bool(robot) == bool(urdf):
-            raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "
-                             "and 'urdf' (a URDF file)")
-        if robot:
-            description = robot_urdf(load_robot_params(os.path.expanduser(robot)))
-        else:
-            description = Path(os.path.expanduser(urdf)).read_text()
+        description, tip_link = simulated_description(robot, urdf, p["tip_link"],
+                                                      p["base_link"])
         self.initial = p["initial_positions"] or None
         self.sim = RobotSimulator(description, control_mode=p["control_mode"],
                                   physics_step=p["physics_step"],
                                   initial_positions=self.initial, seed=p["seed"],
-                                  position_gain=p["position_gain"], actuator=p["actuator"])
+                                  position_gain=p["position_gain"], actuator=p["actuator"],
+                                  tip_link=tip_link)
         self.joint_state_pub = self.create_publisher(JointState, "joint_states", 10)
         self.end_effector_pub = self.create_publisher(PointStamped, "end_effector", 10)
         self.clock_pub = (self.create_publisher(Clock, p["clock_topic"], CLOCK_QOS)

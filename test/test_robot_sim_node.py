@@ -240,3 +240,37 @@ def test_a_reset_sent_before_the_simulator_listens_is_sent_again(tmp_path):
         client.close()
         for node in nodes:
             assert node.stop() == 0
+
+
+def test_a_pybullet_panda_runs_down_to_its_hand(tmp_path):
+    """Issue 52: robot:=panda.urdf branches at the hand; tip_link names the chain's end, and
+    an unknown link is one FATAL line naming the links there are."""
+    import pybullet_data
+
+    from lpa_transfer.robots.kinematics import robot_kinematics
+
+    panda = f"{pybullet_data.getDataPath()}/franka_panda/panda.urdf"
+    domain_id = unique_domain_id()
+    bad = NodeProcess("robot_sim", domain_id, tmp_path / "bad",
+                      ros_params(robot=panda, tip_link="hand"))
+    assert bad.process.wait(60) != 0
+    fatal = [line for line in bad.log().splitlines() if "FATAL" in line]
+    assert len(fatal) == 1 and "no link 'hand' (tip_link)" in fatal[0], bad.log()
+    assert "'panda_hand'" in fatal[0]
+    bad.stop()
+    node = NodeProcess("robot_sim", domain_id, tmp_path / "good",
+                       ros_params(robot=panda, tip_link="panda_hand"))
+    client = SimClient(domain_id)
+    try:
+        target = np.array([0.3, -0.4, 0.2, -1.8, 0.1, 1.2, 0.5])
+        response = client.step(target, 2000)
+        assert response.success, (response.message, node.log())
+        assert len(response.joint_state.name) == 7
+        q = np.array(response.joint_state.position)
+        robot = load_robot_params(panda, tip_link="panda_hand")
+        hand = robot_kinematics(robot).forward(q[None])[0]
+        ee = response.end_effector
+        np.testing.assert_allclose([ee.x, ee.y, ee.z], hand, atol=1e-6)
+    finally:
+        client.close()
+        assert node.stop() == 0, node.log()

@@ -113,3 +113,66 @@ def test_robot_sim_node_serves_a_urdf_robot(urdf_file, tmp_path):
     finally:
         client.close()
         assert node.stop() == 0, node.log()
+
+
+# -- the arms that ship with pybullet (issue 52, item 1) ------------------------------------
+from pathlib import Path  # noqa: E402
+
+import pybullet_data  # noqa: E402
+
+from conftest import ROOT  # noqa: E402
+from lpa_transfer.robots.simulator import simulated_description  # noqa: E402
+
+DATA = Path(pybullet_data.getDataPath())
+PANDA = DATA / "franka_panda/panda.urdf"
+
+
+def _link_pose(urdf_path, names, q, link):
+    """pybullet's world position of ``link`` with the named joints at ``q`` (same file)."""
+    client = p.connect(p.DIRECT)
+    try:
+        body = p.loadURDF(str(urdf_path), useFixedBase=True, physicsClientId=client)
+        infos = [p.getJointInfo(body, j, physicsClientId=client)
+                 for j in range(p.getNumJoints(body, physicsClientId=client))]
+        index = {info[1].decode(): info[0] for info in infos}
+        for name, angle in zip(names, q):
+            p.resetJointState(body, index[name], angle, physicsClientId=client)
+        link_index = next(info[0] for info in infos if info[12].decode() == link)
+        return np.array(p.getLinkState(body, link_index, computeForwardKinematics=True,
+                                       physicsClientId=client)[4])
+    finally:
+        p.disconnect(client)
+
+
+def test_panda_chain_down_to_a_named_tip_link():
+    with pytest.raises(ValueError, match="branches into joints"):
+        load_robot_params(PANDA)
+    robot = load_robot_params(PANDA, tip_link="panda_hand")
+    assert robot.n_joints == 7          # the fingers' prismatic joints are off the chain
+    q = np.random.default_rng(1).uniform(robot.joint_limits[:, 0], robot.joint_limits[:, 1])
+    names = [f"panda_joint{i}" for i in range(1, 8)]
+    np.testing.assert_allclose(robot_kinematics(robot).forward(q[None])[0],
+                               _link_pose(PANDA, names, q, "panda_hand"), atol=1e-9)
+    # from a base link: the joints above it are left out
+    assert load_robot_params(PANDA, base_link="panda_link2", tip_link="panda_hand").n_joints == 5
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(tip_link="hand"), r"no link 'hand' \(tip_link\); its links: \['panda_link0'.*"
+                            r"'panda_grasptarget'\]"),
+    (dict(base_link="link0"), r"no link 'link0' \(base_link\); its links: \['panda_link0'"),
+    (dict(base_link="panda_link5", tip_link="panda_link2"), "is not below 'panda_link5'")])
+def test_unknown_or_misplaced_links_are_refused_naming_the_links(options, message):
+    with pytest.raises(ValueError, match=message):
+        load_robot_params(PANDA, **options)
+
+
+def test_link_options_need_a_urdf():
+    with pytest.raises(ValueError, match="apply to a URDF file"):
+        load_robot_params(ROOT / "scenarios/robots/two_link_source.toml", tip_link="link2")
+
+
+def test_the_robot_files_are_simulated_bit_for_bit_as_before():
+    for path in sorted((ROOT / "scenarios/robots").glob("*.toml")):
+        assert simulated_description(robot=str(path)) == (
+            robot_urdf(load_robot_params(path)), None), path

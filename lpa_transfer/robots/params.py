@@ -299,11 +299,15 @@ def _read_toml(path, seen=()):
     return {**_read_toml(parent_path, (*seen, path.resolve())), **data}
 
 
-def load_robot_params(path):
+def load_robot_params(path, **urdf_options):
     """Read and validate a robot parameter file, or the chain of a URDF (``*.urdf``,
-    :mod:`lpa_transfer.robots.urdf`); errors name the file and the key."""
+    :mod:`lpa_transfer.robots.urdf`; ``urdf_options``: ``tip_link`` and ``base_link`` of
+    :func:`~lpa_transfer.robots.urdf.urdf_robot_table`, for a URDF only); errors name the file and the key."""
     path = Path(path)
-    data = urdf_robot_table(path) if path.suffix.lower() == ".urdf" else _read_toml(path)
+    is_urdf = path.suffix.lower() == ".urdf"
+    if urdf_options and not is_urdf:
+        raise ValueError(f"{path}: {sorted(urdf_options)} apply to a URDF file (*.urdf) only")
+    data = urdf_robot_table(path, **urdf_options) if is_urdf else _read_toml(path)
     for key in ("name", "source"):
         if not isinstance(data.get(key), str) or not data[key].strip():
             raise ValueError(f"{path}: missing key '{key}' (a non-empty string)")

@@ -40,6 +40,27 @@ def robot_urdf(robot):
     return serial_chain_urdf(robot)
 
 
+def simulated_description(robot="", urdf="", tip_link="", base_link=""):
+    """(URDF text, end-effector link or None) for
+    robot_sim: ``robot`` a robot file or a URDF read as a serial chain
+    (:func:`~lpa_transfer.robots.params.load_robot_params`, from ``base_link`` to ``tip_link``;
+    the text is :func:`robot_urdf`'s), or ``urdf`` a URDF simulated as it is (its text;
+    ``tip_link`` names the end-effector link). Exactly one of them; empty strings are "not given". ValueError otherwise."""
+    from lpa_transfer.robots.params import load_robot_params
+
+    if bool(robot) == bool(urdf):
+        raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "
+                         "and 'urdf' (a URDF file)")
+    path = Path(robot or urdf).expanduser()
+    if urdf:
+        if base_link:
+            raise ValueError("base_link applies to robot:=<file>.urdf (a chain read from the "
+                             "URDF); urdf:= simulates the whole file from its root link")
+        return path.read_text(), tip_link or None
+    options = {k: v for k, v in (("tip_link", tip_link), ("base_link", base_link)) if v}
+    return robot_urdf(load_robot_params(path, **options)), None
+
+
 @dataclass(frozen=True, eq=False)
 class SimState:
     """The robot's state at ``time`` (s of simulated time since start/reset)."""
@@ -80,10 +101,12 @@ class RobotSimulator:
     ``armature`` and ``joint_damping`` (read-only, per joint) are the URDF's joint drives
     (module docstring); the armature acts in torque mode with the ``"torque"`` actuator.
     ``actuator`` (torque mode only): ``"torque"`` or ``"velocity_motor"`` (module docstring).
+    ``tip_link``: the link whose frame is the end effector (default: the last link).
     """
 
     def __init__(self, urdf, control_mode="position", physics_step=1e-3,
-                 initial_positions=None, seed=0, position_gain=0.05, actuator="torque"):
+                 initial_positions=None, seed=0, position_gain=0.05, actuator="torque",
+                 tip_link=None):
         import pybullet as p
 
         if control_mode not in CONTROL_MODES:
@@ -99,6 +122,7 @@ class RobotSimulator:
             raise ValueError(f"position_gain must be in (0, 1], got {position_gain!r}")
         self._p, self.control_mode, self.physics_step = p, control_mode, float(physics_step)
         self.seed, self.position_gain = seed, float(position_gain)
+        self.tip_link = tip_link
         self._client = p.connect(p.DIRECT)
         try:
             self._load(urdf)
@@ -131,10 +155,15 @@ class RobotSimulator:
             bad = [n for n, e in zip(self.joint_names, self.effort_limits) if not e > 0]
             raise ValueError(f"joints {bad} have no positive effort limit in the URDF "
                              f"(<limit effort=...>); the simulator needs one to clip commands")
-        self._ee_link = n_all - 1
         # every link's name and its parent's (-1: the base), for link_frames()
         self.base_link = p.getBodyInfo(self._body, physicsClientId=cid)[0].decode()
         self.link_names = [info[12].decode() for info in infos]
+        self._ee_link = n_all - 1
+        if self.tip_link is not None:
+            if self.tip_link not in self.link_names:
+                raise ValueError(f"no link {self.tip_link!r} (tip_link) below the base link "
+                                 f"{self.base_link!r}; its links: {self.link_names}")
+            self._ee_link = self.link_names.index(self.tip_link)
         self._link_parents = [info[16] for info in infos]
         self._base_inertial = p.invertTransform(*p.getDynamicsInfo(
             self._body, -1, physicsClientId=cid)[3:5])

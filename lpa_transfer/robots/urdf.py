@@ -6,9 +6,9 @@ library's XML parser (no new dependency; pybullet still loads the URDF that
 :func:`lpa_transfer.robots.serial_chain.serial_chain_urdf` writes back, so the simulation and
 the kinematics share one description):
 
-* the chain: from the root link (the one no joint moves) down to ``tip_link``, or, without it,
-  down the only child joint of every link to a leaf (a branching link is an error that names
-  the branches);
+* the chain: from ``base_link`` (default: the root link, the one no joint moves; the links
+  above a given one are left out) down to ``tip_link``, or, without it, down the only child
+  joint of every link to a leaf (a branching link is an error that names the branches);
 * revolute joints move (continuous joints too, limited to [-π, π]); fixed joints are folded
   into the next joint's origin, into the base (before the first moving joint) or into the tool
   (after the last); prismatic, floating and planar joints are refused;
@@ -20,6 +20,7 @@ the kinematics share one description):
 """
 import xml.etree.ElementTree as ElementTree
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -85,10 +86,11 @@ def _combined(bodies):
     return mass, com, inertia
 
 
-def urdf_robot_table(path, tip_link=None):
+def urdf_robot_table(path, tip_link=None, base_link=None):
     """The robot-file table (name, source, kind, joints, links, base, tool) of a URDF's
-    chain (module docstring); ValueError naming the file and the element when it cannot be
-    read as one."""
+    chain from ``base_link`` (default: the root link) to ``tip_link`` (module docstring);
+    ValueError naming the file and the element when it cannot be read as one."""
+    path = Path(path)
     try:
         root = ElementTree.parse(path).getroot()
     except (ElementTree.ParseError, OSError) as exc:
@@ -107,6 +109,11 @@ def urdf_robot_table(path, tip_link=None):
     roots = [name for name in links if name not in by_child]
     if len(roots) != 1:
         raise ValueError(f"{path}: expected one root link, found {roots}")
+    for role, name in (("base_link", base_link), ("tip_link", tip_link)):
+        if name is not None and name not in links:
+            raise ValueError(f"{path}: no link {name!r} ({role}); its links: {list(links)}")
+    if base_link is not None:
+        roots = [base_link]
     chain = _chain(path, roots[0], tip_link, links, by_parent, by_child)
     moving = [joint for joint in chain if joint.get("type") in MOVING]
     refused = [f"{joint.get('name')} ({joint.get('type')})" for joint in chain
@@ -137,10 +144,11 @@ def urdf_robot_table(path, tip_link=None):
 
 def _chain(path, root, tip_link, links, by_parent, by_child):
     if tip_link is not None:
-        if tip_link not in links:
-            raise ValueError(f"{path}: no link {tip_link!r}")
         chain, link = [], tip_link
         while link != root:
+            if link not in by_child:
+                raise ValueError(f"{path}: link {tip_link!r} (tip_link) is not below "
+                                 f"{root!r} (base_link)")
             chain.append(by_child[link])
             link = by_child[link].find("parent").get("link")
         return chain[::-1]
@@ -192,3 +200,4 @@ def _link_entry(path, name, links, by_parent):
     return {"mass": mass, "com": com.tolist(),
             "inertia": dict(zip(_INERTIA_KEYS, (inertia[0, 0], inertia[0, 1], inertia[0, 2],
                                                 inertia[1, 1], inertia[1, 2], inertia[2, 2])))}
+
