@@ -53,7 +53,8 @@ def parameters(namespace):
     return (
         ("robot", "", "robot parameter file (scenarios/robots/*.toml) or a URDF file (*.urdf: "
          "its serial chain from the root link); set exactly one of robot and urdf"),
-        ("urdf", "", "a URDF file simulated as it is, instead of robot"),
+        ("urdf", "", "a URDF file simulated as it is (its meshes and package:// paths "
+         "resolved against its own folder), instead of robot"),
         ("tip_link", "", "the chain's last link: robot:=*.urdf reads the chain down to it, "
          "urdf:= takes its frame as the end effector; empty: the only leaf (robot), the "
          "last link (urdf)"),

@@ -116,15 +116,17 @@ def test_robot_sim_node_serves_a_urdf_robot(urdf_file, tmp_path):
 
 
 # -- the arms that ship with pybullet (issue 52, item 1) ------------------------------------
+import xml.etree.ElementTree as ElementTree  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import pybullet_data  # noqa: E402
 
 from conftest import ROOT  # noqa: E402
 from lpa_transfer.robots.simulator import simulated_description  # noqa: E402
+from lpa_transfer.robots.urdf import simulated_urdf  # noqa: E402
 
 DATA = Path(pybullet_data.getDataPath())
-PANDA = DATA / "franka_panda/panda.urdf"
+IIWA, PANDA = DATA / "kuka_iiwa/model.urdf", DATA / "franka_panda/panda.urdf"
 
 
 def _link_pose(urdf_path, names, q, link):
@@ -170,6 +172,33 @@ def test_unknown_or_misplaced_links_are_refused_naming_the_links(options, messag
 def test_link_options_need_a_urdf():
     with pytest.raises(ValueError, match="apply to a URDF file"):
         load_robot_params(ROOT / "scenarios/robots/two_link_source.toml", tip_link="link2")
+
+
+@pytest.mark.parametrize("urdf, n_joints", [(IIWA, 7), (PANDA, 9)])
+def test_the_arms_load_as_they_are_with_their_meshes(urdf, n_joints):
+    text = simulated_urdf(urdf)
+    meshes = [m.get("filename") for m in ElementTree.fromstring(text).iter("mesh")]
+    assert meshes and all(Path(m).is_absolute() and Path(m).is_file() for m in meshes)
+    with RobotSimulator(text) as sim:      # through a temporary file, as robot_sim does
+        assert sim.n_joints == n_joints
+        assert sim.joint_names[0] in ("lbr_iiwa_joint_1", "panda_joint1")
+
+
+def test_package_paths_resolve_against_the_file_and_a_missing_mesh_is_named(tmp_path):
+    (tmp_path / "my_arm" / "meshes").mkdir(parents=True)
+    (tmp_path / "my_arm" / "meshes" / "a.stl").write_text("solid a\nendsolid a\n")
+    urdf = tmp_path / "my_arm" / "urdf" / "arm.urdf"
+    urdf.parent.mkdir()
+    body = URDF.replace('<link name="tip"/>', '<link name="tip"><visual><geometry><mesh '
+                        'filename="package://my_arm/meshes/a.stl"/></geometry></visual></link>')
+    urdf.write_text(body)
+    text = simulated_urdf(urdf)
+    assert f'filename="{tmp_path / "my_arm/meshes/a.stl"}"' in text
+    assert text.replace(str(tmp_path / "my_arm/meshes/a.stl"),
+                        "package://my_arm/meshes/a.stl") == body   # nothing else changed
+    urdf.write_text(body.replace("a.stl", "b.stl"))
+    with pytest.raises(ValueError, match=r"meshes not found: package://my_arm/meshes/b.stl"):
+        simulated_urdf(urdf)
 
 
 def test_the_robot_files_are_simulated_bit_for_bit_as_before():

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from lpa_transfer.robots.serial_chain import matrix_rpy, rpy_matrix
+from lpa_transfer.robots.urdf_files import resolve_mesh_paths
 
 MOVING = ("revolute", "continuous")
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -201,3 +202,14 @@ def _link_entry(path, name, links, by_parent):
             "inertia": dict(zip(_INERTIA_KEYS, (inertia[0, 0], inertia[0, 1], inertia[0, 2],
                                                 inertia[1, 1], inertia[1, 2], inertia[2, 2])))}
 
+
+
+def simulated_urdf(path):
+    """The URDF text of the file ``path`` for the simulator to load as it is: its mesh paths
+    made absolute against its own folder
+    (:func:`~lpa_transfer.robots.urdf_files.resolve_mesh_paths`), the rest the file's own."""
+    path = Path(path)
+    try:
+        return resolve_mesh_paths(path.read_text(), path.parent)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: {exc}") from None
