@@ -59,6 +59,9 @@ def parameters(namespace):
          "urdf:= takes its frame as the end effector; empty: the only leaf (robot), the "
          "last link (urdf)"),
         ("base_link", "", "robot:=*.urdf only: the chain's first link; empty: the root link"),
+        ("repair_inertia", False, "URDF only: raise the smallest principal moment of each "
+         "inertia that violates a rigid body's triangle inequality (logged per link); "
+         "false: such a URDF is refused, naming the links"),
         ("control_mode", "position", "position: commands are joint targets (rad); torque: "
          "commands are joint torques (N m)", dict(choices=CONTROL_MODES)),
         ("physics_step", 1e-3, "the pybullet time step (s)", dict(positive=True, finite=True)),
@@ -96,8 +99,10 @@ class RobotSim(Node):
         self.lockstep, self.frame_prefix = p["lockstep"], p["frame_prefix"]
         describe_use_sim_time(self)
         robot, urdf = p["robot"], p["urdf"]
-        description, tip_link = simulated_description(robot, urdf, p["tip_link"],
-                                                      p["base_link"])
+        description, tip_link, repairs = simulated_description(
+            robot, urdf, p["tip_link"], p["base_link"], p["repair_inertia"])
+        for line in repairs:
+            self.get_logger().warning(f"{robot or urdf}: {line}")
         self.initial = p["initial_positions"] or None
         self.sim = RobotSimulator(description, control_mode=p["control_mode"],
                                   physics_step=p["physics_step"],

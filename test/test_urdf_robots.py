@@ -123,10 +123,11 @@ import pybullet_data  # noqa: E402
 
 from conftest import ROOT  # noqa: E402
 from lpa_transfer.robots.simulator import simulated_description  # noqa: E402
-from lpa_transfer.robots.urdf import simulated_urdf  # noqa: E402
+from lpa_transfer.robots.urdf import read_urdf, simulated_urdf  # noqa: E402
 
 DATA = Path(pybullet_data.getDataPath())
-IIWA, PANDA = DATA / "kuka_iiwa/model.urdf", DATA / "franka_panda/panda.urdf"
+IIWA, PANDA, XARM = (DATA / "kuka_iiwa/model.urdf", DATA / "franka_panda/panda.urdf",
+                     DATA / "xarm/xarm6_robot.urdf")
 
 
 def _link_pose(urdf_path, names, q, link):
@@ -176,7 +177,8 @@ def test_link_options_need_a_urdf():
 
 @pytest.mark.parametrize("urdf, n_joints", [(IIWA, 7), (PANDA, 9)])
 def test_the_arms_load_as_they_are_with_their_meshes(urdf, n_joints):
-    text = simulated_urdf(urdf)
+    text, repairs = simulated_urdf(urdf)
+    assert repairs == []
     meshes = [m.get("filename") for m in ElementTree.fromstring(text).iter("mesh")]
     assert meshes and all(Path(m).is_absolute() and Path(m).is_file() for m in meshes)
     with RobotSimulator(text) as sim:      # through a temporary file, as robot_sim does
@@ -192,7 +194,7 @@ def test_package_paths_resolve_against_the_file_and_a_missing_mesh_is_named(tmp_
     body = URDF.replace('<link name="tip"/>', '<link name="tip"><visual><geometry><mesh '
                         'filename="package://my_arm/meshes/a.stl"/></geometry></visual></link>')
     urdf.write_text(body)
-    text = simulated_urdf(urdf)
+    text, _ = simulated_urdf(urdf)
     assert f'filename="{tmp_path / "my_arm/meshes/a.stl"}"' in text
     assert text.replace(str(tmp_path / "my_arm/meshes/a.stl"),
                         "package://my_arm/meshes/a.stl") == body   # nothing else changed
@@ -201,7 +203,46 @@ def test_package_paths_resolve_against_the_file_and_a_missing_mesh_is_named(tmp_
         simulated_urdf(urdf)
 
 
+def _principal(inertia):
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    ixx, ixy, ixz, iyy, iyz, izz = (float(inertia.get(k)) for k in keys)
+    return np.linalg.eigvalsh([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+
+
+def test_xarm_inertias_are_refused_naming_the_links_and_repaired_on_request():
+    for load in (lambda: load_robot_params(XARM), lambda: simulated_urdf(XARM)):
+        with pytest.raises(ValueError, match=r"link 'link2'.*triangle inequality.*link 'link3'"
+                                             r".*repair_inertia"):
+            load()
+    original = {link.get("name"): link for link in ElementTree.parse(XARM).getroot()
+                .findall("link")}
+    root, lines = read_urdf(XARM, repair_inertia=True)
+    assert [line.split(":")[0] for line in lines] == ["link 'link2'", "link 'link3'"]
+    for link in root.findall("link"):
+        before = original[link.get("name")]
+        if before.find("inertial/inertia") is None:
+            continue
+        old, new = _principal(before.find("inertial/inertia")), _principal(
+            link.find("inertial/inertia"))
+        assert before.find("inertial/mass").get("value") == link.find(
+            "inertial/mass").get("value")
+        if link.get("name") in ("link2", "link3"):
+            np.testing.assert_allclose(new[1:], old[1:], rtol=1e-9)   # the others kept
+            assert new[0] > old[0] and new[2] < new[0] + new[1]
+        else:
+            assert all(a.attrib == b.attrib for a, b in zip(before.iter(), link.iter()))
+    assert load_robot_params(XARM, repair_inertia=True).n_joints == 6
+    # pybullet keeps the repaired inertias (it zeroes the file's own link2 and link3)
+    text, _ = simulated_urdf(XARM, repair_inertia=True)
+    with RobotSimulator(text) as sim:
+        body, client = sim._body, sim._client
+        for name in ("link2", "link3"):
+            index = sim.link_names.index(name)
+            diagonal = p.getDynamicsInfo(body, index, physicsClientId=client)[2]
+            assert min(diagonal) > 0, (name, diagonal)
+
+
 def test_the_robot_files_are_simulated_bit_for_bit_as_before():
     for path in sorted((ROOT / "scenarios/robots").glob("*.toml")):
         assert simulated_description(robot=str(path)) == (
-            robot_urdf(load_robot_params(path)), None), path
+            robot_urdf(load_robot_params(path)), None, []), path

@@ -301,8 +301,9 @@ def _read_toml(path, seen=()):
 
 def load_robot_params(path, **urdf_options):
     """Read and validate a robot parameter file, or the chain of a URDF (``*.urdf``,
-    :mod:`lpa_transfer.robots.urdf`; ``urdf_options``: ``tip_link`` and ``base_link`` of
-    :func:`~lpa_transfer.robots.urdf.urdf_robot_table`, for a URDF only); errors name the file and the key."""
+    :mod:`lpa_transfer.robots.urdf`; ``urdf_options``: ``tip_link``, ``base_link``,
+    ``repair_inertia`` of :func:`~lpa_transfer.robots.urdf.urdf_robot_table`, for a URDF
+    only); errors name the file and the key."""
     path = Path(path)
     is_urdf = path.suffix.lower() == ".urdf"
     if urdf_options and not is_urdf:

@@ -40,15 +40,15 @@ def robot_urdf(robot):
     return serial_chain_urdf(robot)
 
 
-def simulated_description(robot="", urdf="", tip_link="", base_link=""):
-    """(URDF text, end-effector link or None) for
+def simulated_description(robot="", urdf="", tip_link="", base_link="", repair_inertia=False):
+    """(URDF text, end-effector link or None, lines saying what a repair changed) for
     robot_sim: ``robot`` a robot file or a URDF read as a serial chain
     (:func:`~lpa_transfer.robots.params.load_robot_params`, from ``base_link`` to ``tip_link``;
     the text is :func:`robot_urdf`'s), or ``urdf`` a URDF simulated as it is
     (:func:`~lpa_transfer.robots.urdf.simulated_urdf`; ``tip_link`` names the end-effector
     link). Exactly one of them; empty strings are "not given". ValueError otherwise."""
     from lpa_transfer.robots.params import load_robot_params
-    from lpa_transfer.robots.urdf import simulated_urdf
+    from lpa_transfer.robots.urdf import read_urdf, simulated_urdf
 
     if bool(robot) == bool(urdf):
         raise ValueError("set exactly one of the parameters 'robot' (a robot .toml file) "
@@ -58,9 +58,13 @@ def simulated_description(robot="", urdf="", tip_link="", base_link=""):
         if base_link:
             raise ValueError("base_link applies to robot:=<file>.urdf (a chain read from the "
                              "URDF); urdf:= simulates the whole file from its root link")
-        return simulated_urdf(path), tip_link or None
+        text, lines = simulated_urdf(path, repair_inertia)
+        return text, tip_link or None, lines
     options = {k: v for k, v in (("tip_link", tip_link), ("base_link", base_link)) if v}
-    return robot_urdf(load_robot_params(path, **options)), None
+    if repair_inertia:
+        options["repair_inertia"] = True
+    lines = read_urdf(path, True)[1] if repair_inertia and path.suffix == ".urdf" else []
+    return robot_urdf(load_robot_params(path, **options)), None, lines
 
 
 @dataclass(frozen=True, eq=False)

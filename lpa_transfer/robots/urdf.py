@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from lpa_transfer.robots.serial_chain import matrix_rpy, rpy_matrix
-from lpa_transfer.robots.urdf_files import resolve_mesh_paths
+from lpa_transfer.robots.urdf_files import inertia_problems, resolve_mesh_paths
 
 MOVING = ("revolute", "continuous")
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -87,17 +87,30 @@ def _combined(bodies):
     return mass, com, inertia
 
 
-def urdf_robot_table(path, tip_link=None, base_link=None):
-    """The robot-file table (name, source, kind, joints, links, base, tool) of a URDF's
-    chain from ``base_link`` (default: the root link) to ``tip_link`` (module docstring);
-    ValueError naming the file and the element when it cannot be read as one."""
-    path = Path(path)
+def read_urdf(path, repair_inertia=False):
+    """The parsed ``<robot>`` element of the URDF file ``path`` with its inertias checked
+    (:func:`lpa_transfer.robots.urdf_files.inertia_problems`), and the lines saying what a
+    ``repair_inertia`` changed; ValueError naming the file otherwise."""
     try:
         root = ElementTree.parse(path).getroot()
     except (ElementTree.ParseError, OSError) as exc:
         raise ValueError(f"{path}: not a readable URDF: {exc}") from None
     if root.tag != "robot":
         raise ValueError(f"{path}: the root element is <{root.tag}>, not <robot>")
+    try:
+        return root, inertia_problems(root, repair=repair_inertia)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+
+
+def urdf_robot_table(path, tip_link=None, base_link=None, repair_inertia=False):
+    """The robot-file table (name, source, kind, joints, links, base, tool) of a URDF's
+    chain from ``base_link`` (default: the root link) to ``tip_link`` (module docstring);
+    ValueError naming the file and the element when it cannot be read as one. With
+    ``repair_inertia`` inertias that are not a rigid body's are repaired first
+    (:func:`read_urdf`)."""
+    path = Path(path)
+    root, _ = read_urdf(path, repair_inertia)
     links = {link.get("name"): link for link in root.findall("link")}
     joints, by_parent, by_child = {}, defaultdict(list), {}
     for joint in root.findall("joint"):
@@ -203,13 +216,16 @@ def _link_entry(path, name, links, by_parent):
                                                 inertia[1, 1], inertia[1, 2], inertia[2, 2])))}
 
 
-
-def simulated_urdf(path):
-    """The URDF text of the file ``path`` for the simulator to load as it is: its mesh paths
-    made absolute against its own folder
-    (:func:`~lpa_transfer.robots.urdf_files.resolve_mesh_paths`), the rest the file's own."""
+def simulated_urdf(path, repair_inertia=False):
+    """(URDF text, repair lines) of the file ``path`` for the simulator to load as it is:
+    its mesh paths made absolute against its own folder
+    (:func:`~lpa_transfer.robots.urdf_files.resolve_mesh_paths`), its inertias checked and,
+    with ``repair_inertia``, repaired (:func:`read_urdf`; only then is the text rewritten from
+    the parsed tree, otherwise it is the file's own)."""
     path = Path(path)
+    root, lines = read_urdf(path, repair_inertia)
+    text = ElementTree.tostring(root, encoding="unicode") if lines else path.read_text()
     try:
-        return resolve_mesh_paths(path.read_text(), path.parent)
-    except (OSError, ValueError) as exc:
+        return resolve_mesh_paths(text, path.parent), lines
+    except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
