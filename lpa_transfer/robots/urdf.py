@@ -171,7 +171,8 @@ def _chain(path, root, tip_link, links, by_parent, by_child):
         if len(by_parent[link]) > 1:
             branches = [joint.get("name") for joint in by_parent[link]]
             raise ValueError(f"{path}: link {link!r} branches into joints {branches}; name the "
-                             "tip link of the chain to use")
+                             f"tip link of the chain to use (tip_link; robot_sim: -p "
+                             f"tip_link:=<link>), one of the links {list(links)}")
         chain.append(by_parent[link][0])
         link = chain[-1].find("child").get("link")
     return chain
