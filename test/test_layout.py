@@ -27,7 +27,7 @@ ALLOWED = {
     "robots": BASE,
     "learners": BASE,
     "evaluation": BASE,
-    "recording": set(),
+    "recording": {"_lazy"},                 # its __init__ exports lazily
     "exploration": BASE | {"robots", "learners"},
     **{chapter: BASE | {"transfer", "robots", "learners", "evaluation", "recording",
                         "exploration"} for chapter in CHAPTERS},
@@ -107,6 +107,46 @@ def test_the_package_root_offers_the_transfer_models_and_lwpr():
     assert LWPR is FromLearners
     for model in (ProcrustesAnalysis, LocalProcrustesAnalysis):
         assert callable(model.fit) and callable(model.transfer)
+
+
+SUBPACKAGES = sorted(path.parent.name for path in LIBRARY.glob("*/__init__.py"))
+
+
+@pytest.mark.parametrize("name", SUBPACKAGES)
+def test_each_subpackage_exports_its_public_names_lazily(name):
+    """Each subpackage names its public API in ``__all__`` (imported on first use), and every
+    name resolves to what its module defines, not to a submodule of the same name."""
+    code = ("import importlib, sys, types\n"
+            f"package = importlib.import_module('lpa_transfer.{name}')\n"
+            "loaded = sorted(k for k in sys.modules if k.startswith('lpa_transfer.'))\n"
+            "assert package.__all__, 'no __all__'\n"
+            "for export in package.__all__:\n"
+            "    value = getattr(package, export)\n"
+            "    assert not isinstance(value, types.ModuleType), export\n"
+            "print(loaded)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    # importing the subpackage alone imports none of its modules (only _lazy, at the root)
+    assert eval(out.stdout) == sorted({f"lpa_transfer.{name}", "lpa_transfer._lazy"})
+
+
+def test_no_two_subpackages_export_the_same_name():
+    """``from lpa_transfer.<sub> import X`` names one thing: the chapters' parallel names
+    (``write_outputs``, ``merge``, ``CONDITIONS``) stay in their modules."""
+    import importlib
+    owners = {}
+    for name in SUBPACKAGES:
+        for export in importlib.import_module(f"lpa_transfer.{name}").__all__:
+            owners.setdefault(export, []).append(name)
+    assert {export: where for export, where in owners.items() if len(where) > 1} == {}
+
+
+def test_importing_the_robots_loads_no_scikit_learn():
+    code = ("import sys, lpa_transfer.robots\n"
+            "print(sorted(k for k in sys.modules if k.split('.')[0] in ('sklearn', 'scipy')))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
 
 
 def test_no_top_level_function_name_means_two_things_in_the_library():
