@@ -4,6 +4,8 @@ Every check raises ``ValueError`` with a message that names the offending argume
 caller (for example the mapping service) can hand the message straight back to its user.
 """
 import numbers
+import os
+import stat
 
 import numpy as np
 
@@ -133,3 +135,29 @@ def finite_transfer(mapped, source):
                          f"{rows[0]}, largest |value| {np.abs(source[rows[0]]).max():.3g}) are "
                          "not finite: the inputs are too large for float64 arithmetic")
     return mapped
+
+
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+
+
+def open_regular_file(path, what):
+    """``path`` opened for reading in binary mode, never blocking on a FIFO or a device;
+    ValueError "<what> <path> is not a regular file (a FIFO)" for anything but a regular file
+    (a symbolic link to one is one). Checked with stat before it is opened (a device or a
+    socket is never opened), then opened with O_NONBLOCK and checked again on the open
+    descriptor, so the file checked is the file read."""
+    _check_regular(os.stat(os.fspath(path)).st_mode, path, what)
+    fd = os.open(os.fspath(path), os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        _check_regular(os.fstat(fd).st_mode, path, what)
+    except ValueError:
+        os.close(fd)
+        raise
+    return os.fdopen(fd, "rb")
+
+
+def _check_regular(mode, path, what):
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS if test(mode)), "an unknown kind of file")
+        raise ValueError(f"{what} {path} is not a regular file ({kind})")

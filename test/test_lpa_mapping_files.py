@@ -23,6 +23,7 @@ def service(tmp_path_factory):
     os.symlink(outside / "pairs.npz", data_dir / "link_out.npz")
     os.symlink(outside, data_dir / "dir_out")
     os.symlink(data_dir / "run1" / "pairs.npz", data_dir / "link_in.npz")
+    os.mkfifo(data_dir / "fifo.npz")
     domain_id = unique_domain_id()
     node = NodeProcess("lpa_mapping", domain_id, root / "log",
                        ros_params(model_dir=root / "models", data_dir=data_dir))
@@ -67,3 +68,13 @@ def test_a_missing_file_inside_data_dir_is_a_bad_request(service):
     answer = fit_file(client, "nothing.npz")
     assert not answer.success and "nothing.npz" in answer.message, answer.message
     assert node.alive()
+
+
+def test_a_fifo_as_correspondence_file_is_refused_and_later_fits_run(service):
+    """Issue 53 item 4: a FIFO as correspondence_file once blocked every later fit."""
+    client, node, data_dir, _ = service
+    answer = fit_file(client, "fifo.npz")
+    assert not answer.success, answer.message
+    assert f"correspondence file {data_dir / 'fifo.npz'} is not a regular file (a FIFO)" in \
+        answer.message, answer.message
+    assert fit_file(client, "pairs.npz").success and node.alive()

@@ -1,5 +1,7 @@
 """ListModels names the model files quarantined at start (issue 29 item 1), on a node in its
 own process, which serves the other models as before."""
+import os
+
 import numpy as np
 
 from lpa_transfer import LocalProcrustesAnalysis
@@ -51,3 +53,33 @@ def test_a_clean_start_lists_no_quarantined_ids(tmp_path):
     finally:
         client.close()
         assert node.stop() == 0, node.log()
+
+
+def test_a_fifo_model_and_a_quarantine_file_do_not_stop_the_start(tmp_path):
+    """Issue 53 item 4: a FIFO named x.npz once kept the node from ever serving (deaf to
+    SIGINT), a plain file named quarantine stopped it with FATAL "File exists"."""
+    models = tmp_path / "models"
+    models.mkdir()
+    (source, target), test = correspondences(200, seed=1), correspondences(50, seed=2)[0]
+    good = LocalProcrustesAnalysis(n_min=10).fit(source, target)
+    good.save(models / file_name("good"))
+    os.mkfifo(models / file_name("x"))
+    (models / "quarantine").write_text("a file, not a folder")
+    domain_id = unique_domain_id()
+    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log",
+                       ros_params(model_dir=models))
+    client = MappingClient(domain_id)
+    try:
+        listed = client.call("list")
+        assert listed.success, listed.message + node.log()
+        assert list(listed.model_ids) == ["good"] and list(listed.quarantined_ids) == ["x"]
+        answer = client.call("transfer", model_id="good", source=matrix(test))
+        assert np.array_equal(points(answer.target), good.transfer(test))
+    finally:
+        client.close()
+        assert node.stop() == 0, node.log()
+    log = node.log()
+    assert log.count("skipped a model file") == 1, log
+    assert f"{file_name('x')} moved to quarantine.1/ (quarantine in {models} is not a " \
+           "directory)" in log and "is not a regular file (a FIFO)" in log, log
+    assert (models / "quarantine.1" / file_name("x")).exists()

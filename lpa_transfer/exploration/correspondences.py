@@ -20,7 +20,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from lpa_transfer._validation import check_float, check_int, check_x_bounds
+from lpa_transfer._validation import (check_float, check_int, check_x_bounds,
+                                      open_regular_file)
 from lpa_transfer.robots import inverse_kinematics
 from lpa_transfer.robots.kinematics import execute, overlapping_limits, pad_transferred
 from lpa_transfer.robots.simulator import elapsed
@@ -133,9 +134,27 @@ def read_correspondences(path):
     default, except ``features``: ``()`` when the file names none (its columns are
     unknown). A ValueError says why a file cannot be read, or that it lacks source or target.
     """
+    try:
+        file = open_regular_file(path, "correspondence file")   # never blocks on a FIFO
+    except OSError as exc:
+        raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
+    with file:
+        members = _members(path, file)
+    header = {key: kind(members[key].tolist() if kind is tuple else members[key])
+              for key, (kind, ndim) in _HEADER.items()
+              if key in members and members[key].ndim == ndim}
+    header.setdefault("features", ())
+    return CorrespondenceSet(members["source"], members["target"], **header,
+                             metadata={key[len("meta_"):]: value for key, value in members.items()
+                                       if key.startswith("meta_")})
+
+
+def _members(path, file):
+    """The arrays of a correspondence file open as ``file``, by name; ValueError says why
+    they cannot be read, or that the file lacks source or target."""
     unreadable = (OSError, EOFError, ValueError, zipfile.BadZipFile)   # e.g. a truncated file
     try:
-        archive = np.load(os.fspath(path), allow_pickle=False)
+        archive = np.load(file, allow_pickle=False)
     except unreadable as exc:
         raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
     if not isinstance(archive, np.lib.npyio.NpzFile):
@@ -146,16 +165,9 @@ def read_correspondences(path):
             raise ValueError(f"correspondence file {path} lacks the arrays {missing} "
                              f"(has {archive.files})")
         try:
-            members = {key: archive[key] for key in archive.files}
+            return {key: archive[key] for key in archive.files}
         except unreadable as exc:   # a damaged member, object arrays
             raise ValueError(f"cannot read correspondence file {path}: {exc}") from None
-    header = {key: kind(members[key].tolist() if kind is tuple else members[key])
-              for key, (kind, ndim) in _HEADER.items()
-              if key in members and members[key].ndim == ndim}
-    header.setdefault("features", ())
-    return CorrespondenceSet(members["source"], members["target"], **header,
-                             metadata={key[len("meta_"):]: value for key, value in members.items()
-                                       if key.startswith("meta_")})
 
 
 def load_correspondences(path):

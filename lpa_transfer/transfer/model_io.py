@@ -23,6 +23,8 @@ import tempfile
 
 import numpy as np
 
+from lpa_transfer._validation import open_regular_file
+
 FORMAT = "lpa_transfer-model"
 FORMAT_VERSION = 1
 _REGISTRY = {}
@@ -118,7 +120,16 @@ def load_model_and_metadata(path):
 
 def _read_model(path):
     try:
-        archive = np.load(os.fspath(path), allow_pickle=False)
+        file = open_regular_file(path, "model file")
+    except OSError as exc:
+        raise ValueError(f"cannot read model file {path}: {exc}") from None
+    with file:
+        return _read_archive(path, file)
+
+
+def _read_archive(path, file):
+    try:
+        archive = np.load(file, allow_pickle=False)
     except (OSError, ValueError) as exc:
         raise ValueError(f"cannot read model file {path}: {exc}") from None
     with archive:

@@ -11,6 +11,7 @@ Each model carries metadata (:data:`METADATA`), saved in its file (the ``metadat
 the model file): the robots' names and the columns' names a caller gave, where the
 correspondences came from and the training error. A file without it loads with the defaults.
 """
+import os
 import threading
 import urllib.parse
 from pathlib import Path
@@ -152,7 +153,11 @@ class ModelStore:
     ``quarantined``, the reason in ``load_errors``); temporary files left by a save that was
     killed are removed; a model file under a name that is not its id's (placed by hand, e.g.
     ``pa.v2.npz`` for id ``pa.v2``) is renamed to it, or quarantined if the id's own file is
-    there too, so that one id is one file and ``delete`` removes it.
+    there too, so that one id is one file and ``delete`` removes it. Entries that are not
+    regular files (a FIFO, a device, a socket, a directory) are never opened for reading, so
+    none blocks the start: they are quarantined like bad files. If ``quarantine`` is taken by
+    something other than a directory, ``quarantine.1/`` (or the next free number) is used, and
+    a file that cannot be moved aside at all is left in place, not served, with the reason.
 
     Thread-safe: fits, transfers, descriptions and deletions may run in several threads. A
     fit computes its model without a lock, then saves it and swaps it in under the store's
@@ -169,7 +174,10 @@ class ModelStore:
         self._lock = threading.Lock()           # the dict of models: lookups and the swap
         self._write_lock = threading.Lock()     # one save or delete at a time
         for stale in self.directory.glob(TEMPORARY_PREFIX + "*" + SUFFIX):
-            stale.unlink(missing_ok=True)     # a save killed before its rename
+            try:
+                stale.unlink(missing_ok=True)     # a save killed before its rename
+            except OSError as exc:                # e.g. a directory of that name
+                self.load_errors.append(f"{stale.name} left in place: {exc}")
         for path in sorted(self.directory.glob("*" + SUFFIX)):
             model_id = model_id_of(path)
             try:
@@ -191,11 +199,28 @@ class ModelStore:
                 self._quarantine(path, model_id, str(exc))
 
     def _quarantine(self, path, model_id, reason):
-        folder = self.directory / self.QUARANTINE
-        folder.mkdir(exist_ok=True)
-        path.replace(folder / path.name)
         self.quarantined.append(model_id)
-        self.load_errors.append(f"{path.name} moved to {self.QUARANTINE}/: {reason}")
+        try:
+            folder = self._quarantine_folder()
+            path.replace(folder / path.name)
+            where = f"moved to {folder.name}/"
+            if folder.name != self.QUARANTINE:
+                where += f" ({self.QUARANTINE} in {self.directory} is not a directory)"
+        except OSError as exc:
+            where = f"left in place, not served (it cannot be moved aside: {exc})"
+        self.load_errors.append(f"{path.name} {where}: {reason}")
+
+    def _quarantine_folder(self):
+        """``quarantine/`` in the directory, created if need be; if an entry that is not a
+        directory holds that name, the first of ``quarantine.1/``, ``quarantine.2/``, ...
+        that is a directory or free (OSError if none of the first 100 is)."""
+        for number in range(100):
+            folder = self.directory / (self.QUARANTINE + (f".{number}" if number else ""))
+            if folder.is_dir() or not os.path.lexists(folder):
+                folder.mkdir(exist_ok=True)
+                return folder
+        raise OSError(f"no quarantine folder: {self.QUARANTINE} to {self.QUARANTINE}.99 in "
+                      f"{self.directory} are taken by files that are not directories")
 
     def path(self, model_id):
         return self.directory / file_name(model_id)
