@@ -119,6 +119,7 @@ class MappingClient:
         return self._clients[name]
 
     def _call(self, name, request):
+        _check_strings(request)
         client = self._clients[name]
         if self.executor is not None:     # a job node's executor: the project's waits
             stop = self.stop or threading.Event()
@@ -145,3 +146,16 @@ def _matrix(values, name):
         raise ValueError(f"{name} must be a 2-D array (points x dimensions), got shape "
                          f"{values.shape}")
     return values
+
+
+def _check_strings(request):
+    """ValueError for a string field (or a string in a list field) of ``request`` with a NUL
+    character: rclpy would cut it there, so "a\\0b" would reach the service as "a" (issue 53:
+    fitting "a\\0b" overwrote the model "a")."""
+    for field in request.get_fields_and_field_types():
+        value = getattr(request, field)
+        for text in ([value] if isinstance(value, str) else
+                     value if isinstance(value, list) else ()):
+            if isinstance(text, str) and "\0" in text:
+                raise ValueError(f"{field} {text!r} contains a NUL character, which a ROS 2 "
+                                 f"string cannot carry (it would be cut there)")

@@ -121,3 +121,27 @@ def test_a_missing_service_is_a_clear_error(mapping):
     client = MappingClient(mapping[0].node, service="/nobody", timeout=0.5)
     with pytest.raises(RuntimeError, match="/nobody/list is not available"):
         client.list()
+
+
+def test_a_nul_in_a_string_is_refused_before_it_is_sent(mapping):
+    """Issue 53 item 6: rclpy cuts a string at its first NUL, so fitting "a\\0b" overwrote
+    the model "a" (and deleting "a\\0b" would delete "a"); the client now refuses it."""
+    client, _ = mapping
+    source, target = correspondences(60, seed=1)
+    client.fit("a", source, target, method="pa")
+    model = ProcrustesAnalysis().fit(source, target)
+    for call in (lambda: client.fit("a\0b", source[:50], target[:50], method="pa"),
+                 lambda: client.delete("a\0b"),
+                 lambda: client.transfer("a\0b", source),
+                 lambda: client.describe("a\0b"),
+                 lambda: client.fit("c", source, target, method="pa",
+                                    source_robot="x\0y")):
+        with pytest.raises(ValueError, match=r"contains a NUL character"):
+            call()
+    for control in ("a\x01b", "a\nb", "a\x7fb"):       # the service refuses the others
+        with pytest.raises(RuntimeError, match="contains control characters"):
+            client.fit(control, source, target, method="pa")
+    assert client.describe("a")["n_points"] == 60
+    assert np.array_equal(client.transfer("a", source), model.transfer(source))
+    assert "c" not in client.list().model_ids
+    client.delete("a")
