@@ -150,8 +150,8 @@ def _matrix(values, name):
 
 def _check_strings(request):
     """ValueError for a string field (or a string in a list field) of ``request`` with a NUL
-    character: rclpy would cut it there, so "a\\0b" would reach the service as "a" (issue 53:
-    fitting "a\\0b" overwrote the model "a")."""
+    character: rclpy would cut it there, so "a\\0b" would reach the service as "a" (and
+    fitting "a\\0b" would overwrite the model "a")."""
     for field in request.get_fields_and_field_types():
         value = getattr(request, field)
         for text in ([value] if isinstance(value, str) else

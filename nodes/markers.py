@@ -1,4 +1,4 @@
-"""Task paths as visualization_msgs/MarkerArray, for Foxglove's 3-D panel and RViz (issue 28).
+"""Task paths as visualization_msgs/MarkerArray, so Foxglove's 3-D panel and RViz draw them.
 
 The learners publish what their robot is asked to do and what it did on ``~/task_markers``
 (``/<robot>/<learner>/task_markers``; latched, so a late viewer or the recorder gets the

@@ -73,7 +73,7 @@ def pytest_sessionfinish(session, exitstatus):
     """Remove the shared-memory segments of Fast DDS processes the tests killed.
 
     ``fastdds shm clean`` only removes segments whose owner process is gone, so it never
-    disturbs a live ROS graph (shared/notes/ros2-from-pypi.md).
+    disturbs a live ROS graph.
     """
     fastdds = Path(sys.prefix) / "bin" / "fastdds"
     if fastdds.exists():

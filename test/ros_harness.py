@@ -3,7 +3,7 @@
 Each test gets its own ``ROS_DOMAIN_ID`` (so tests never see each other's traffic), discovery
 stays on this host, and every node writes its own log file. ``stop()`` sends SIGINT first
 (nodes must finalise their files on it) and falls back to SIGKILL, because rclpy 7.1 can
-ignore signals while blocked in a wait set (shared/notes/ros2-from-pypi.md).
+ignore signals while blocked in a wait set.
 """
 import ctypes
 import itertools

@@ -157,7 +157,7 @@ def finished_bag(path, n=600):
 
 
 def test_no_single_bit_flip_is_read_silently(tmp_path):
-    """Issue 29 row 10: 150 random single-bit flips of a finished bag; each read either gives
+    """A damaged bag: 150 random single-bit flips of a finished bag; each read either gives
     the original messages or raises BagError naming the file (CRCs are checked)."""
     import numpy as np
 
@@ -180,7 +180,7 @@ def test_no_single_bit_flip_is_read_silently(tmp_path):
 
 
 def test_a_killed_recording_is_recovered_into_a_finalised_bag(tmp_path):
-    """Issue 29 row 9/12: cut a bag mid-file (a killed recorder); --recover writes a finalised
+    """A bag cut mid-file (a killed recorder, a full disk): --recover writes a finalised
     copy with every complete message, which the normal reader and summary accept."""
     import subprocess
     import sys

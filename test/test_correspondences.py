@@ -726,7 +726,7 @@ def test_guided_collection_in_the_targets_own_ranges_keeps_its_whole_experience(
                                  [0, 1], [0, 1], 10.0, target_range="all")
 
 
-# -- true pairs for any robot pair: settling by state and the pairing checks (issue 31) -------
+# -- true pairs for any robot pair: settling by state and the pairing checks ----------------
 FAST_LINES = BabblingProgram("joint_lines", 20, 2, seed=0)   # 40 commands, long jumps
 
 

@@ -1,4 +1,5 @@
-"""Fast checks of lpa_transfer.goal_babbling.diagnosis (issue 27, thesis §6.5.1)."""
+"""Fast checks of lpa_transfer.goal_babbling.diagnosis, which explains the chapter 6
+set-up's reaching rates (thesis §6.5.1)."""
 import numpy as np
 import pytest
 

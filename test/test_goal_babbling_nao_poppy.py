@@ -84,7 +84,7 @@ def test_nao_poppy_pairs_share_commands_on_four_joints(nao_poppy_run):
 
 
 def test_nao_poppy_in_the_thesis_z_up_scene(tmp_path):
-    """Issue 27's decided set-up (nao_poppy_zup.yaml) in small: both robots standing in the
+    """The chapter 6 set-up (nao_poppy_zup.yaml) in small: both robots standing in the
     z-up scene, X_bounds read there, conditions scratch, LPA (guarded too) and PA; Nao's
     experience lowers Poppy's mean error (measured at 60 s: scratch 126 mm, LPA 93, PA 93)."""
     out = tmp_path / "run"

@@ -251,7 +251,7 @@ def test_merging_runs_with_start_noise_checks_that_scratch_varies_by_seed(tmp_pa
 
 
 def test_the_plateau_rule_judges_each_curve_by_its_own_end():
-    """Issue 26 factor 7: a curve still falling at the end has not converged within the
+    """Convergence of a curve: one still falling at the end has not converged within the
     budget ("> n"); a levelled curve converges where it enters its own final band."""
     from lpa_transfer.inverse_dynamics.analysis import convergence_table, trials_to_plateau
 

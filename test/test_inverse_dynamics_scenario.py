@@ -117,9 +117,10 @@ def test_outputs_and_bag(smoke_run):
 
 
 def test_the_bag_shows_each_robot_to_an_independent_reader(smoke_run):
-    """Issue 28: the scenario's bag (the demo's graph) read with rosbags' own Jazzy types has
-    each robot's simulated clock, its URDF and, at its last state, a complete transform tree
-    from the world to every link of that URDF, whose last link is where end_effector says."""
+    """What a viewer needs: the scenario's bag (the demo's graph) read with rosbags' own Jazzy
+    types has each robot's simulated clock, its URDF and, at its last state, a complete
+    transform tree from the world to every link of that URDF, whose last link is where
+    end_effector says."""
     store = get_typestore(Stores.ROS2_JAZZY)
     wanted = {f"/{robot}/{topic}" for robot in ROBOTS
               for topic in ("clock", "robot_description", "end_effector")} | {"/tf", "/tf_static"}
@@ -160,8 +161,8 @@ def test_the_bag_shows_each_robot_to_an_independent_reader(smoke_run):
 
 
 def test_the_task_markers_show_the_star_and_the_last_trial(smoke_run):
-    """Issue 28: each learner's latched ~/task_markers (visualization_msgs/MarkerArray, read
-    with rosbags' Jazzy types) clears its earlier markers and draws the star's desired path
+    """What a viewer draws: each learner's latched ~/task_markers (visualization_msgs/MarkerArray,
+    read with rosbags' Jazzy types) clears its earlier markers and draws the star's desired path
     and the last trial's path, point for point those of its TrialResult (read with the
     project's own decoder)."""
     store = get_typestore(Stores.ROS2_JAZZY)
@@ -213,7 +214,7 @@ def test_a_share_in_the_demos_shape_repeats_the_full_runs_curves(smoke_run, demo
 
 
 def test_the_graph_over_three_network_hosts_gives_the_same_curves(demo_share, tmp_path):
-    """Issue 30: scenarios/multi_host/run.sh --scenario inverse_dynamics puts the robot_sims,
+    """Across hosts: scenarios/multi_host/run.sh --scenario inverse_dynamics puts the robot_sims,
     lpa_mapping and the rest on three network namespaces (DDS over UDP on their bridge); the
     lock-step curves of the demo's shape equal the one-host run's bit for bit and the bag
     holds the same topics. Skipped, with the script's one-line reason, where namespaces

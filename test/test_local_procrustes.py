@@ -512,7 +512,7 @@ def test_floored_exp_is_exp_of_the_clamped_values(live_share, simd_exp, monkeypa
 
 
 def test_finite_inputs_far_from_the_data_take_the_nearest_maps_never_zeros():
-    """Issue 29 row 4: at |x| >= ~1e154 the expanded Mahalanobis term overflows; such points
+    """Huge inputs: at |x| >= ~1e154 the expanded Mahalanobis term overflows; such points
     take the map of the component nearest in Mahalanobis distance, and what cannot be a
     finite answer is an error."""
     from two_link import correspondences

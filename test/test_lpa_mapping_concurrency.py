@@ -1,8 +1,8 @@
-"""lpa_mapping answers transfers while a fit runs (issue 29 item 3), on a node in its own
-process: the node handles them between the fit's start and end (its log says when), with the
-answers given when nothing else ran, and a model being refitted answers with its previous
-version until the new one is stored. Latency is measured in bench/bench_mapping_limits.py
---latency, not asserted here."""
+"""lpa_mapping answers transfers while a fit runs (a long fit must not stall the users of other
+models), on a node in its own process: the node handles them between the fit's start and end
+(its log says when), with the answers given when nothing else ran, and a model being refitted
+answers with its previous version until the new one is stored. Latency is measured in
+bench/bench_mapping_limits.py --latency, not asserted here."""
 import re
 
 import numpy as np

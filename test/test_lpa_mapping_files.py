@@ -1,6 +1,7 @@
-"""lpa_mapping reads correspondence files only inside its data_dir (issue 29 item 5), on a
-node in its own process: relative names are taken in it; absolute paths, '..' and symbolic
-links that lead outside it are refused naming data_dir, and the service keeps serving."""
+"""lpa_mapping reads correspondence files only inside its data_dir (a request names no other
+file of the host), on a node in its own process: relative names are taken in it; absolute paths,
+'..' and symbolic links that lead outside it are refused naming data_dir, and the service keeps
+serving."""
 import os
 
 import numpy as np
@@ -71,7 +72,7 @@ def test_a_missing_file_inside_data_dir_is_a_bad_request(service):
 
 
 def test_a_fifo_as_correspondence_file_is_refused_and_later_fits_run(service):
-    """Issue 53 item 4: a FIFO as correspondence_file once blocked every later fit."""
+    """A FIFO as correspondence_file is refused: opening it once blocked every later fit."""
     client, node, data_dir, _ = service
     answer = fit_file(client, "fifo.npz")
     assert not answer.success, answer.message

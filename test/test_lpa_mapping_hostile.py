@@ -1,9 +1,10 @@
-"""lpa_mapping checks a request's sizes before it allocates anything (issue 53 item 1), on a
-node in its own process over DDS: a Matrix of 50,000,000 rows and no columns (``rows*cols ==
-len(data)`` holds) once took the service to a 1.78 GB peak before it answered "source has no
-columns", and ``rows = 4294967295`` answered "internal error: MemoryError()". Now each is
-refused from its shape, the service's peak RSS grows by less than 50 MiB, a transfer beyond
-the memory budget ``max_transfer_mib`` is refused naming it, and the service keeps serving."""
+"""lpa_mapping checks a request's sizes before it allocates anything (a hostile request must
+not exhaust the host's memory), on a node in its own process over DDS: a Matrix of 50,000,000
+rows and no columns (``rows*cols == len(data)`` holds) once took the service to a 1.78 GB peak
+before it answered "source has no columns", and ``rows = 4294967295`` answered "internal error:
+MemoryError()". Now each is refused from its shape, the service's peak RSS grows by less than
+50 MiB, a transfer beyond the memory budget ``max_transfer_mib`` is refused naming it, and the
+service keeps serving."""
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from test_lpa_mapping_node import MappingClient, fit, matrix, points
 from two_link import correspondences
 
 BUDGET_MIB = 4
-#: The goal of issue 53: a refused request grows the service's peak RSS by less than this.
+#: The goal: a refused request grows the service's peak RSS by less than this.
 MAX_PEAK_GROWTH_MIB = 50
 
 

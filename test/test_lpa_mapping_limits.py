@@ -1,6 +1,7 @@
-"""lpa_mapping's limits on one request's work (issue 29 item 2), on a node in its own process:
-a fit past max_fit_points, max_n_init or max_k_max is refused naming the parameter and its
-value, k_max = 0 stays within max_k_max, and a transfer in blocks equals one block."""
+"""lpa_mapping's limits on one request's work (so no request holds the service for long), on a
+node in its own process: a fit past max_fit_points, max_n_init or max_k_max is refused naming
+the parameter and its value, k_max = 0 stays within max_k_max, and a transfer in blocks equals
+one block."""
 import json
 
 import numpy as np

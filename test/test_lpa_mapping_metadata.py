@@ -1,7 +1,7 @@
-"""Model metadata over the graph (issue 28 item 5): two robot_sims, lpa_mapping and the
-correspondence_collector. The collector's fit stores the robots' and the columns' names;
-a fit from its saved file in data_dir or from the pairs the service received on its topics
-takes them from there when the request leaves them empty."""
+"""Model metadata over the graph (which robots and columns a model maps): two robot_sims,
+lpa_mapping and the correspondence_collector. The collector's fit stores the robots' and the
+columns' names; a fit from its saved file in data_dir or from the pairs the service received on
+its topics takes them from there when the request leaves them empty."""
 import pytest
 
 from lpa_transfer_nodes.mapping_client import MappingClient

@@ -1,5 +1,5 @@
-"""ListModels names the model files quarantined at start (issue 29 item 1), on a node in its
-own process, which serves the other models as before."""
+"""ListModels names the model files quarantined at start (a damaged file must not stop the
+service), on a node in its own process, which serves the other models as before."""
 import os
 
 import numpy as np
@@ -56,8 +56,9 @@ def test_a_clean_start_lists_no_quarantined_ids(tmp_path):
 
 
 def test_a_fifo_model_and_a_quarantine_file_do_not_stop_the_start(tmp_path):
-    """Issue 53 item 4: a FIFO named x.npz once kept the node from ever serving (deaf to
-    SIGINT), a plain file named quarantine stopped it with FATAL "File exists"."""
+    """Entries that are not regular files: a FIFO named x.npz once kept the node from ever
+    serving (deaf to SIGINT), a plain file named quarantine stopped it with FATAL
+    "File exists"."""
     models = tmp_path / "models"
     models.mkdir()
     (source, target), test = correspondences(200, seed=1), correspondences(50, seed=2)[0]

@@ -436,7 +436,7 @@ def test_equals_the_reference_with_15_inputs_and_5_outputs():
 
 
 def test_empty_prediction_zero_answers_0_where_no_field_is_active():
-    """Issue 26 factor 6: the authors' library predicts 0 where no receptive field is active;
+    """Outside the data: the authors' library predicts 0 where no receptive field is active;
     ours (default "nearest") the nearest field's offset. Inside the data both agree, also for
     the prediction made before learning in update()."""
     rng = np.random.default_rng(0)

@@ -1,4 +1,4 @@
-"""The public MappingClient (issue 28 item 5) against a live lpa_mapping process: fit,
+"""The public MappingClient (numpy in, numpy out) against a live lpa_mapping process: fit,
 transfer, describe, list and delete on numpy arrays, the model's metadata, and the errors."""
 import math
 
@@ -124,7 +124,7 @@ def test_a_missing_service_is_a_clear_error(mapping):
 
 
 def test_a_nul_in_a_string_is_refused_before_it_is_sent(mapping):
-    """Issue 53 item 6: rclpy cuts a string at its first NUL, so fitting "a\\0b" overwrote
+    """A NUL in a string: rclpy cuts a string at its first NUL, so fitting "a\\0b" overwrote
     the model "a" (and deleting "a\\0b" would delete "a"); the client now refuses it."""
     client, _ = mapping
     source, target = correspondences(60, seed=1)

@@ -114,7 +114,8 @@ def test_unreadable_files_are_skipped(tmp_path, data):
 
 
 def damaged_store(tmp_path, data):
-    """A store with two good models and one damaged file of each kind (issue 29, row 1)."""
+    """A store with two good models and one damaged file of each kind (a damaged file is set
+    aside, the others are served)."""
     (source, target), _ = data
     store = ModelStore(tmp_path)
     for model_id in ("good/lpa", "good.pa", "truncated", "empty", "crc", "wrong arrays"):

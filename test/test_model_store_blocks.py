@@ -1,4 +1,5 @@
-"""transfer_in_blocks: an LPA transfer block of rows by block of rows (issue 29 item 2)."""
+"""transfer_in_blocks: an LPA transfer block of rows by block of rows, so a large transfer
+needs bounded memory and equals one block."""
 import numpy as np
 import pytest
 

@@ -1,5 +1,5 @@
-"""ModelStore from several threads (issue 29 item 3): a refit swaps the model in atomically,
-the old one answering until then, and the file always holds the served model."""
+"""ModelStore from several threads (the service answers while it fits): a refit swaps the model
+in atomically, the old one answering until then, and the file always holds the served model."""
 import threading
 
 import numpy as np

@@ -1,7 +1,7 @@
-"""Model and correspondence files that are not regular files (issue 53 item 4): a FIFO, a
-device or a socket in model_dir is quarantined without being opened for reading (a FIFO once
-blocked the start for ever), a ``quarantine`` entry that is not a directory does not stop the
-start, and a FIFO read as a correspondence file is a ValueError, not a hang."""
+"""Model and correspondence files that are not regular files (opening one could block): a
+FIFO, a device or a socket in model_dir is quarantined without being opened for reading (a FIFO
+once blocked the start for ever), a ``quarantine`` entry that is not a directory does not stop
+the start, and a FIFO read as a correspondence file is a ValueError, not a hang."""
 import os
 import socket
 import threading

@@ -1,5 +1,5 @@
-"""Model metadata (issue 28 item 5): saved in the model file, reloaded, checked; files
-without it (written before it existed) still load."""
+"""Model metadata (which robots and columns a model maps): saved in the model file, reloaded,
+checked; files without it (written before it existed) still load."""
 import json
 import math
 

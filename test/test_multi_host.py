@@ -1,5 +1,5 @@
-"""The 2-link graph over three network namespaces (scenarios/multi_host/run.sh, issue 30):
-the same results as on one host, every topic recorded, no route out, and a link that goes
+"""The 2-link graph over three network namespaces (scenarios/multi_host/run.sh), as if on three
+hosts: the same results as on one host, every topic recorded, no route out, and a link that goes
 down for 2 s mid-collection ridden out, a crashed mapping host restarted from its model files
 (chapter 5 seed shares on two namespaces:
 test_inverse_dynamics_variants.py). Skipped, with the script's one-line reason, where

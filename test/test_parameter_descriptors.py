@@ -1,8 +1,9 @@
-"""Parameter descriptors (issue 28, item 1): every parameter of the converted nodes, asked over
-the standard ``~/list_parameters`` and ``~/describe_parameters`` services of the running node,
-has a description, and those read only at start are flagged read-only (so a change at run
-time is refused, not silently ignored); bounded ones carry their range. A value outside the
-range at start is one FATAL line naming the parameter and what it accepts, exit 1.
+"""Parameter descriptors (so ros2 param describe explains each one): every parameter of the
+converted nodes, asked over the standard ``~/list_parameters`` and ``~/describe_parameters``
+services of the running node, has a description, and those read only at start are flagged
+read-only (so a change at run time is refused, not silently ignored); bounded ones carry their
+range. A value outside the range at start is one FATAL line naming the parameter and what it
+accepts, exit 1.
 
 Nodes with one job (the collector, the scenario experiments) are asked while they wait for
 services or messages that never come; they spin meanwhile (``wait_for_services`` with their

@@ -249,7 +249,7 @@ def test_recorder_on_a_full_disk_stops_with_one_fatal_line_and_exit_1(ros_node, 
 
 
 def test_a_sigkilled_recorder_loses_at_most_the_last_flush_period(ros_node, tmp_path):
-    """Issue 29 row 9: SIGKILL while 200 messages a second arrive. Every message sent more
+    """A killed recorder: SIGKILL while 200 messages a second arrive. Every message sent more
     than 0.3 s before the kill is in the file, for our truncated reader and mcap's own stream
     reader (the recorder closes a chunk every 0.25 s whether or not messages follow)."""
     from mcap.stream_reader import StreamReader

@@ -269,7 +269,7 @@ def test_chapter_5_drives_are_the_sourced_ones():
 
 def test_extends_places_the_same_chain_elsewhere(tmp_path):
     """poppy_right_arm_zup.toml: poppy_right_arm.toml's chain with its own [base]; the z-up
-    scene's right shoulder stands 0.66 m above the floor (issue 27)."""
+    scene's right shoulder stands 0.66 m above the floor."""
     from lpa_transfer.robots.serial_chain import chain_frames
 
     base = load_robot_params(ROBOTS / "poppy_right_arm.toml")

@@ -243,8 +243,8 @@ def test_a_reset_sent_before_the_simulator_listens_is_sent_again(tmp_path):
 
 
 def test_a_pybullet_panda_runs_down_to_its_hand(tmp_path):
-    """Issue 52: robot:=panda.urdf branches at the hand; tip_link names the chain's end, and
-    an unknown link is one FATAL line naming the links there are."""
+    """A branching URDF: robot:=panda.urdf branches at the hand; tip_link names the chain's end,
+    and an unknown link is one FATAL line naming the links there are."""
     import pybullet_data
 
     from lpa_transfer.robots.kinematics import robot_kinematics

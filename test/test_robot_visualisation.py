@@ -1,4 +1,4 @@
-"""What Foxglove and RViz need to draw a simulated robot (issue 28 item 3), over real DDS and
+"""What Foxglove and RViz need to draw a simulated robot, over real DDS and
 read back from the recorder's bag by an independent reader (rosbags, with its own Jazzy type
 store): the latched URDF on robot_description, the base fixed to the world on /tf_static, and
 at every published robot state a transform for every link on /tf, which chained from the world

@@ -133,7 +133,7 @@ def test_pid_servo_torques_do_not_depend_on_how_long_the_clock_has_run():
 
 
 def test_linear_star_legs_run_at_constant_speed_and_minimum_jerk_stays_the_default():
-    """Issue 26 factor 1: ``time_law="linear"`` moves along each 0.6 s leg at constant speed
+    """The linear time law: ``time_law="linear"`` moves along each 0.6 s leg at constant speed
     (the speed jumps at the centre and the tips); the default is unchanged."""
     centre = np.array([0.3, 0.4])
     linear = star_trajectory(centre, [1, 0], [0, 1], 0.05, DT, time_law="linear")

@@ -145,10 +145,11 @@ def _cmdline_holds(pid, text):
 
 def test_a_users_pair_beyond_the_thesis_gets_true_pairs_and_a_mapping_as_good_as_exact_pairs(
         tmp_path):
-    """Issue 31: the user's longer arms (user_pair.yaml) need more than the 400 ms a sample
-    that suffice for the thesis' arms. The collector settles by state: the pairs' joint angles
-    agree within the check's 1e-3 rad, and the service's LPA maps within 25 % of an LPA fitted,
-    with the same hyperparameters, on exact pairs (both arms' kinematics) of the same joints."""
+    """Settling by state: the user's longer arms (user_pair.yaml) need more than the 400 ms a
+    sample that suffice for the thesis' arms. The collector settles by state: the pairs' joint
+    angles agree within the check's 1e-3 rad, and the service's LPA maps within 25 % of an LPA
+    fitted, with the same hyperparameters, on exact pairs (both arms' kinematics) of the same
+    joints."""
     from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
                                                 planar_forward_kinematics,
                                                 sample_joint_uniform)

@@ -115,7 +115,7 @@ def test_robot_sim_node_serves_a_urdf_robot(urdf_file, tmp_path):
         assert node.stop() == 0, node.log()
 
 
-# -- the arms that ship with pybullet (issue 52, item 1) ------------------------------------
+# -- the arms that ship with pybullet ------------------------------------------------------
 import xml.etree.ElementTree as ElementTree  # noqa: E402
 from pathlib import Path  # noqa: E402
 
