@@ -39,7 +39,7 @@ for variant in guarded yielding; do
 done
 PAIRS=()
 for seed in $SEEDS; do   # guided exploration with the target's babbling seed of this run
-    target_seed=$(python -c "from lpa_transfer.goal_babbling.seeds import derived_seeds
+    target_seed=$(python -c "from lpa_transfer.goal_babbling import derived_seeds
 print(derived_seeds($seed)[1])")
     step "guided_exploration_seed$seed" python -m lpa_transfer_nodes.correspondence_collector \
         "${PARAMS[@]}" -r __node:=guided_exploration -p "seed:=$target_seed" \

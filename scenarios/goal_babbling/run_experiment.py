@@ -45,11 +45,10 @@ import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.exploration.correspondences import load_guided_exploration  # noqa: E402
-from lpa_transfer.goal_babbling.seeds import derived_seeds  # noqa: E402
+from lpa_transfer.exploration import load_guided_exploration  # noqa: E402
+from lpa_transfer.goal_babbling import derived_seeds, padded_rows  # noqa: E402
 from lpa_transfer.goal_babbling.report import write_outputs  # noqa: E402
-from lpa_transfer.goal_babbling.transfer import padded_rows  # noqa: E402
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.robots import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.action import GoalBabble  # noqa: E402
 from lpa_transfer_interfaces.srv import InitialiseSensorimotor  # noqa: E402
 from lpa_transfer_nodes.calls import ServiceCalls, wait_for_services  # noqa: E402

@@ -9,7 +9,7 @@ Usage: ``python scenarios/inverse_dynamics/paired_seeds.py RUN_DIR [EARLY_TRIALS
 import sys
 from types import SimpleNamespace
 
-from lpa_transfer.inverse_dynamics.report import final_error_lines, paired_lines, read_run
+from lpa_transfer.inverse_dynamics import final_error_lines, paired_lines, read_run
 
 
 def main(argv):

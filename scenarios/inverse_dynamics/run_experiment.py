@@ -48,14 +48,11 @@ import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.exploration.correspondences import (load_correspondences,  # noqa: E402
-                                                      read_correspondences)
+from lpa_transfer.exploration import load_correspondences, read_correspondences  # noqa: E402
 from lpa_transfer.inverse_dynamics.analysis import CONDITIONS  # noqa: E402
-from lpa_transfer.inverse_dynamics.interpolation import (INTERPOLATIONS,  # noqa: E402
-                                                         interpolated)
-from lpa_transfer.inverse_dynamics.report import (SETTINGS, summary_lines,  # noqa: E402
-                                                  write_outputs)
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.inverse_dynamics import INTERPOLATIONS, interpolated, summary_lines  # noqa: E402
+from lpa_transfer.inverse_dynamics.report import SETTINGS, write_outputs  # noqa: E402
+from lpa_transfer.robots import load_robot_params  # noqa: E402
 from lpa_transfer_interfaces.msg import TrialResult  # noqa: E402
 from lpa_transfer_interfaces.action import RunTrials  # noqa: E402
 from lpa_transfer_interfaces.srv import InitialiseLearner  # noqa: E402

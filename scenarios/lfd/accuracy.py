@@ -23,12 +23,10 @@ import matplotlib
 matplotlib.use("Agg")
 import yaml  # noqa: E402
 
-from lpa_transfer.lfd.accuracy import (accuracy_report, plot_accuracy, read_csvs,  # noqa: E402
-                                       write_csvs)
-from lpa_transfer.lfd.dmp import JointDMP  # noqa: E402
-from lpa_transfer.lfd.experiment import RememberedPairs, demonstrations, load_setup  # noqa: E402
-from lpa_transfer.lfd.skills import (accuracy_sweep, ik_method_errors,  # noqa: E402
-                                     multi_robot_transfer)
+from lpa_transfer.lfd import (JointDMP, RememberedPairs, accuracy_report,  # noqa: E402
+                              accuracy_sweep, ik_method_errors, load_setup, multi_robot_transfer,
+                              plot_accuracy, read_csvs, write_csvs)
+from lpa_transfer.lfd.experiment import demonstrations  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
 

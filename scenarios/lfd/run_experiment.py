@@ -42,13 +42,11 @@ import numpy as np  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 
-from lpa_transfer.robots.kinematics import arm_kinematics  # noqa: E402
-from lpa_transfer.lfd.correspondences import (IK_TOLERANCE,  # noqa: E402
-                                              task_point_residuals)
-from lpa_transfer.lfd.experiment import Demonstration, collect_pairs, load_setup  # noqa: E402
-from lpa_transfer.lfd.report import graph_report, plot_letters  # noqa: E402
-from lpa_transfer.lfd.skills import (CONDITIONS, between, by_shape,  # noqa: E402
-                                     mean_mapping_error, robot_ik_demonstrations)
+from lpa_transfer.robots import arm_kinematics  # noqa: E402
+from lpa_transfer.lfd import (Demonstration, IK_TOLERANCE, between, by_shape,  # noqa: E402
+                              collect_pairs, graph_report, load_setup, mean_mapping_error,
+                              plot_letters, robot_ik_demonstrations, task_point_residuals)
+from lpa_transfer.lfd.skills import CONDITIONS  # noqa: E402
 from lpa_transfer_interfaces.msg import CorrespondenceBatch  # noqa: E402
 from lpa_transfer_interfaces.msg import Demonstration as DemonstrationMsg  # noqa: E402
 from lpa_transfer_interfaces.srv import LearnSkill  # noqa: E402

@@ -27,11 +27,11 @@ from pathlib import Path
 
 import matplotlib
 matplotlib.use("Agg")
-from lpa_transfer.illustrative_example.experiment import (  # noqa: E402
-    LEARNER_KINDS, LINK_FIELDS, SCRATCH_FIELDS, SIZE_FIELDS, build_tasks, make_learner, run_all)
-from lpa_transfer.illustrative_example.report import (  # noqa: E402
-    plot_link_sweep, plot_scratch_sweep, plot_size_sweep, summary_text, write_csv)
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
+from lpa_transfer.illustrative_example import (LEARNER_KINDS, LINK_FIELDS,  # noqa: E402
+                                               SCRATCH_FIELDS, SIZE_FIELDS, build_tasks,
+                                               make_learner, plot_link_sweep, plot_scratch_sweep,
+                                               plot_size_sweep, run_all, summary_text, write_csv)
+from lpa_transfer.robots import load_robot_params  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 TEST_SET_KEYS = ("n_test", "n_experience", "n_target_test")

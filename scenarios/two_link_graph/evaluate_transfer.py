@@ -28,14 +28,12 @@ import numpy as np
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
-from lpa_transfer.exploration.babbling import BabblingProgram
-from lpa_transfer.robots.kinematics import planar_kinematics
-from lpa_transfer.exploration.correspondences import (DEFAULT_FEATURES, load_correspondences,
-                                                      run_commands)
-from lpa_transfer.robots.kinematics import (domain_data, end_effector_rmse,
-                                            planar_forward_kinematics, sample_joint_uniform)
-from lpa_transfer.learners.locally_weighted import LocallyWeightedRegression
-from lpa_transfer.robots.params import load_robot_params
+from lpa_transfer.exploration import (BabblingProgram, DEFAULT_FEATURES, load_correspondences,
+                                      run_commands)
+from lpa_transfer.robots import (domain_data, end_effector_rmse, load_robot_params,
+                                 planar_forward_kinematics, planar_kinematics,
+                                 sample_joint_uniform)
+from lpa_transfer.learners import LocallyWeightedRegression
 from lpa_transfer_interfaces.srv import StepRobot, TransferPoints
 from lpa_transfer_nodes.calls import call_service, wait_for_services
 from lpa_transfer_nodes.conversions import from_matrix, to_matrix

@@ -33,7 +33,7 @@ python - "$OUT" "$WALL" >>"$OUT/report.txt" <<'PY'
 import json, sys
 from pathlib import Path
 import numpy as np
-from lpa_transfer.recording.bag import describe
+from lpa_transfer.recording import describe
 out, wall = Path(sys.argv[1]), float(sys.argv[2])
 evaluation = json.loads((out / "evaluation.json").read_text())
 with np.load(out / "correspondences.npz") as pairs:

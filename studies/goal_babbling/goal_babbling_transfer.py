@@ -19,7 +19,8 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from lpa_transfer.goal_babbling.experiment import CONDITIONS, Experiment1, run_condition  # noqa: E402
+from lpa_transfer.goal_babbling import Experiment1, run_condition  # noqa: E402
+from lpa_transfer.goal_babbling.experiment import CONDITIONS  # noqa: E402
 
 
 def mean_curves(condition, seeds, config):

@@ -24,9 +24,9 @@ from studies.goal_babbling.nao_poppy_rates import model_after_guided, prepare
 
 import numpy as np  # noqa: E402
 
-from lpa_transfer.robots.kinematics import hold_at_home  # noqa: E402
-from lpa_transfer.exploration.guided import shared_limits  # noqa: E402
-from lpa_transfer.goal_babbling.reaching import coverage, evaluate_reaching, reachable_share  # noqa: E402
+from lpa_transfer.robots import hold_at_home  # noqa: E402
+from lpa_transfer.exploration import shared_limits  # noqa: E402
+from lpa_transfer.goal_babbling import coverage, evaluate_reaching, reachable_share  # noqa: E402
 
 N_JOINT_SAMPLES = 400000
 

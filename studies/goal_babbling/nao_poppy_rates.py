@@ -33,20 +33,15 @@ import numpy as np  # noqa: E402
 
 from studies.scenario_params import node_params  # noqa: E402
 
-from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
-from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling  # noqa: E402
-from lpa_transfer.exploration.guided import guided_exploration  # noqa: E402
-from lpa_transfer.robots.kinematics import hold_at_home  # noqa: E402
-from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis  # noqa: E402
-from lpa_transfer.goal_babbling.negative_transfer import (ACTIVE, COVERED, DISAGREED,  # noqa: E402
-                                                          GuardedModel, chain_lipschitz)
-from lpa_transfer.goal_babbling.reaching import (evaluate_reaching, evaluation_points,  # noqa: E402
-                                                 reaching_errors)
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
-from lpa_transfer.learners.sensorimotor import make_sensorimotor_model  # noqa: E402
-from lpa_transfer.goal_babbling.yielding import YieldingModel  # noqa: E402
-from lpa_transfer.goal_babbling.transfer import (initialise_with_transfer, padded_rows,  # noqa: E402
-                                                 transfer_experience)
+from lpa_transfer.robots import hold_at_home, load_robot_params, robot_kinematics  # noqa: E402
+from lpa_transfer.goal_babbling import (ACTIVE, COVERED, DISAGREED, GoalBabbling,  # noqa: E402
+                                        GuardedModel, YieldingModel, chain_lipschitz,
+                                        evaluate_reaching, evaluation_points,
+                                        initialise_with_transfer, padded_rows, reaching_errors,
+                                        transfer_experience)
+from lpa_transfer.exploration import guided_exploration  # noqa: E402
+from lpa_transfer.transfer import LocalProcrustesAnalysis  # noqa: E402
+from lpa_transfer.learners import make_sensorimotor_model  # noqa: E402
 
 #: nao_poppy.yaml, then the --override files (later ones win)
 CONFIG_FILES = [ROOT / "scenarios" / "goal_babbling" / "nao_poppy.yaml"]

@@ -17,11 +17,9 @@ import dataclasses
 
 import numpy as np
 
-from lpa_transfer.exploration.guided import shared_limits
-from lpa_transfer.goal_babbling.reaching import evaluation_points, grid
-from lpa_transfer.robots.kinematics import hold_at_home, robot_kinematics
-from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.serial_chain import chain_frames
+from lpa_transfer.exploration import shared_limits
+from lpa_transfer.goal_babbling import evaluation_points, grid
+from lpa_transfer.robots import chain_frames, hold_at_home, load_robot_params, robot_kinematics
 
 ROBOTS = "scenarios/robots"
 X_BOUNDS = np.array([(0.1, 0.05, 0.4), (0.4, 0.3, 0.8)])        # §6.5.2, in the thesis' scene

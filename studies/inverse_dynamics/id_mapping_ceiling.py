@@ -29,11 +29,11 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.inverse_dynamics.in_process import (BABBLING_SECONDS, SETUPS, TOLERANCE, load,
-                                                      set_up)
+from lpa_transfer.inverse_dynamics import (BABBLING_SECONDS, SETUPS, convergence_table, load,
+                                           per_seed_savings, set_up)
+from lpa_transfer.inverse_dynamics.in_process import TOLERANCE
 from studies.inverse_dynamics.id_seed_accuracy import experiences
 from studies.inverse_dynamics.id_transfer_headroom import MOVING
-from lpa_transfer.inverse_dynamics.analysis import convergence_table, per_seed_savings
 
 SETUP = "zero_answer"
 KEPT = Path("scenarios/inverse_dynamics/reference_results/twenty_trials_in_process/seeds")

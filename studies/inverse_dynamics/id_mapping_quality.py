@@ -15,9 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from lpa_transfer.exploration.correspondences import load_correspondences
-from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
+from lpa_transfer.exploration import load_correspondences
+from lpa_transfer.transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
 
 N_FOLDS = 6
 N_MINS = (40, 80, 160, 320)

@@ -27,11 +27,10 @@ import numpy as np
 import yaml
 from sklearn.neighbors import NearestNeighbors
 
-from lpa_transfer.robots.control import PID
-from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner, make_regressor
-from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
-
-from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
+from lpa_transfer.robots import PID
+from lpa_transfer.inverse_dynamics import (CONFIG, FeedForwardLearner, StarRobot, babble,
+                                           make_regressor)
+from lpa_transfer.transfer import ProcrustesAnalysis
 
 
 def parse_variant(text):
@@ -145,8 +144,7 @@ def main(argv=None):
 def print_reference_table(args, experiment, scratch_runs):
     """The reference's convergence table for the target, learning from scratch replaced by
     ``scratch_runs`` (star -> curves; module docstring)."""
-    from lpa_transfer.inverse_dynamics.analysis import convergence_table
-    from lpa_transfer.inverse_dynamics.report import read_run
+    from lpa_transfer.inverse_dynamics import convergence_table, read_run
     cells = read_run(args.reference)[1]
     curves = {key: list(by_seed.values()) for key, by_seed in cells.items()
               if key.startswith(f"{args.target}/") and key.split("/")[1] in scratch_runs}

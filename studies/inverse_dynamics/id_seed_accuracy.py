@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from lpa_transfer.inverse_dynamics.in_process import SETUPS, TOLERANCE, BABBLING_SECONDS, set_up
+from lpa_transfer.inverse_dynamics import (BABBLING_SECONDS, SETUPS, interpolated,
+                                           per_seed_savings, set_up)
+from lpa_transfer.inverse_dynamics.in_process import TOLERANCE
 from studies.inverse_dynamics.id_transfer_headroom import MOVING, against_own
-from lpa_transfer.inverse_dynamics.analysis import per_seed_savings
-from lpa_transfer.inverse_dynamics.interpolation import interpolated
 
 RUN = Path("scenarios/inverse_dynamics/reference_results/twenty_trials_in_process")
 METHODS = ("PA", "LPA")

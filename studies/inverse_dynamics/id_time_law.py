@@ -23,8 +23,7 @@ import json
 import numpy as np
 import yaml
 
-from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot
-from lpa_transfer.inverse_dynamics.analysis import trials_to_convergence
+from lpa_transfer.inverse_dynamics import CONFIG, StarRobot, trials_to_convergence
 from lpa_transfer.inverse_dynamics.tasks import TIME_LAWS
 
 

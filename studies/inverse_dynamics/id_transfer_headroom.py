@@ -29,10 +29,8 @@ import numpy as np
 import yaml
 from sklearn.neighbors import NearestNeighbors
 
-from lpa_transfer.transfer.local_procrustes import LocalProcrustesAnalysis
-from lpa_transfer.transfer.procrustes import ProcrustesAnalysis
-from lpa_transfer.inverse_dynamics.interpolation import interpolated
-from lpa_transfer.inverse_dynamics.star_robot import CONFIG, StarRobot, babble
+from lpa_transfer.transfer import LocalProcrustesAnalysis, ProcrustesAnalysis
+from lpa_transfer.inverse_dynamics import CONFIG, StarRobot, babble, interpolated
 
 # the same held-out blocks
 from studies.inverse_dynamics.id_mapping_quality import held_out_predictions

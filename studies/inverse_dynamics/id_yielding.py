@@ -35,11 +35,10 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.exceptions import NotFittedError
 
-from lpa_transfer.inverse_dynamics.in_process import BABBLING_SECONDS, set_up
+from lpa_transfer.inverse_dynamics import BABBLING_SECONDS, convergence_table, interpolated, set_up
 from lpa_transfer import _validation as check
-from lpa_transfer.inverse_dynamics.analysis import convergence_table
-from lpa_transfer.inverse_dynamics.interpolation import interpolated
-from lpa_transfer.learners.lwpr import LWPR, _PROJ_AXES, _PROJ_STATS, _SCALARS
+from lpa_transfer.learners import LWPR
+from lpa_transfer.learners.lwpr import _PROJ_AXES, _PROJ_STATS, _SCALARS
 
 SETUP = "zero_spline_mj"
 MODES = ("residual", "gate")

@@ -28,13 +28,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[2]
 
-from lpa_transfer.robots.kinematics import robot_kinematics  # noqa: E402
-from lpa_transfer.robots.control import PID  # noqa: E402
-from lpa_transfer.learners.lwpr import LWPR  # noqa: E402
-from lpa_transfer.inverse_dynamics.online_learning import FeedForwardLearner  # noqa: E402
-from lpa_transfer.robots.params import load_robot_params  # noqa: E402
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf  # noqa: E402
-from lpa_transfer.inverse_dynamics.tasks import star_task  # noqa: E402
+from lpa_transfer.robots import (PID, RobotSimulator, load_robot_params,  # noqa: E402
+                                 robot_kinematics, robot_urdf)
+from lpa_transfer.learners import LWPR  # noqa: E402
+from lpa_transfer.inverse_dynamics import FeedForwardLearner, star_task  # noqa: E402
 
 PHYSICS_STEP = 1e-3
 #: robot file stem: (PID kp, ki, kd of §5.5.2, star centre pose q_c, star radius m): Star 1

@@ -30,19 +30,13 @@ from pathlib import Path
 import numpy as np
 
 from studies.scenario_params import node_params
-from lpa_transfer.exploration.babbling import BabblingProgram
-from lpa_transfer.exploration.correspondences import (PairCheck, SettlingStep,
-                                                      collect_correspondences,
-                                                      collect_guided_correspondences)
-from lpa_transfer.goal_babbling.seeds import derived_seeds
-from lpa_transfer.goal_babbling.goal_babbling import GoalBabbling
-from lpa_transfer.lfd.correspondences import (collect_demonstrator_correspondences,
-                                              task_point_residuals)
-from lpa_transfer.lfd.experiment import MAX_BATCHES, load_setup
-from lpa_transfer.robots.environment import stepped_environment
-from lpa_transfer.robots.kinematics import robot_kinematics
-from lpa_transfer.robots.params import load_robot_params
-from lpa_transfer.robots.simulator import RobotSimulator, robot_urdf
+from lpa_transfer.exploration import (BabblingProgram, PairCheck, SettlingStep,
+                                      collect_correspondences, collect_guided_correspondences)
+from lpa_transfer.goal_babbling import GoalBabbling, derived_seeds
+from lpa_transfer.lfd import (MAX_BATCHES, collect_demonstrator_correspondences, load_setup,
+                              task_point_residuals)
+from lpa_transfer.robots import (RobotSimulator, load_robot_params, robot_kinematics, robot_urdf,
+                                 stepped_environment)
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "scenarios"
