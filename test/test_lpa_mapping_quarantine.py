@@ -11,20 +11,30 @@ from test_lpa_mapping_node import MappingClient, matrix, points
 from two_link import correspondences
 
 
-def test_corrupt_files_at_start_are_listed_as_quarantined_and_the_rest_served(tmp_path):
+def model_dir(tmp_path, model_id):
+    """(model_dir holding one good LPA model ``model_id``, the model, test source points)."""
     models = tmp_path / "models"
     models.mkdir()
     (source, target), test = correspondences(200, seed=1), correspondences(50, seed=2)[0]
     good = LocalProcrustesAnalysis(n_min=10).fit(source, target)
-    good.save(models / file_name("good/lpa"))
+    good.save(models / file_name(model_id))
+    return models, good, test
+
+
+def serving(tmp_path, models):
+    """(an lpa_mapping node in its own process on ``models``, a client on its domain)."""
+    domain_id = unique_domain_id()
+    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log", ros_params(model_dir=models))
+    return node, MappingClient(domain_id)
+
+
+def test_corrupt_files_at_start_are_listed_as_quarantined_and_the_rest_served(tmp_path):
+    models, good, test = model_dir(tmp_path, "good/lpa")
     good.save(models / file_name("truncated"))
     truncated = models / file_name("truncated")
     truncated.write_bytes(truncated.read_bytes()[:300])
     (models / file_name("not a model")).write_bytes(b"hello")
-    domain_id = unique_domain_id()
-    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log",
-                       ros_params(model_dir=models))
-    client = MappingClient(domain_id)
+    node, client = serving(tmp_path, models)
     try:
         listed = client.call("list")
         assert listed.success, listed.message
@@ -59,17 +69,10 @@ def test_a_fifo_model_and_a_quarantine_file_do_not_stop_the_start(tmp_path):
     """Entries that are not regular files: a FIFO named x.npz once kept the node from ever
     serving (deaf to SIGINT), a plain file named quarantine stopped it with FATAL
     "File exists"."""
-    models = tmp_path / "models"
-    models.mkdir()
-    (source, target), test = correspondences(200, seed=1), correspondences(50, seed=2)[0]
-    good = LocalProcrustesAnalysis(n_min=10).fit(source, target)
-    good.save(models / file_name("good"))
+    models, good, test = model_dir(tmp_path, "good")
     os.mkfifo(models / file_name("x"))
     (models / "quarantine").write_text("a file, not a folder")
-    domain_id = unique_domain_id()
-    node = NodeProcess("lpa_mapping", domain_id, tmp_path / "log",
-                       ros_params(model_dir=models))
-    client = MappingClient(domain_id)
+    node, client = serving(tmp_path, models)
     try:
         listed = client.call("list")
         assert listed.success, listed.message + node.log()
