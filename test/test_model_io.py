@@ -47,8 +47,12 @@ def test_unknown_version_wrong_class_and_garbage_are_rejected(tmp_path):
     with pytest.raises(ValueError, match="format version 99"):
         load_model(tmp_path / "future.npz")
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
-    with pytest.raises(ValueError, match="cannot read model file"):
+    with pytest.raises(ValueError, match="not an lpa_transfer model file") as refused:
         load_model(tmp_path / "junk.npz")
+    assert "pickle" not in str(refused.value)   # numpy's reason would invite unsafe loading
+    (tmp_path / "short.npz").write_bytes(b"PK")
+    with pytest.raises(ValueError, match="not a zip archive"):
+        load_model(tmp_path / "short.npz")
     with zipfile.ZipFile(tmp_path / "empty.npz", "w"):
         pass
     with pytest.raises(ValueError, match="not an lpa_transfer model file"):

@@ -127,7 +127,14 @@ def _read_model(path):
         return _read_archive(path, file)
 
 
+#: The first bytes of a zip archive (an .npz): a local file header, or an empty archive's end.
+_ZIP_MAGIC = (b"PK\x03\x04", b"PK\x05\x06")
+
+
 def _read_archive(path, file):
+    if file.read(4) not in _ZIP_MAGIC:   # numpy would take it for a pickle and say so
+        raise ValueError(f"{path} is not an lpa_transfer model file (not a zip archive)")
+    file.seek(0)
     try:
         archive = np.load(file, allow_pickle=False)
     except (OSError, ValueError) as exc:
